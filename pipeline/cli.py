@@ -1,0 +1,149 @@
+"""Command line: ``roughcontact run|plan|show|plot|scenes``.
+
+Exit codes: 0 ok, 1 failure or (for ``plan``) something would run, 2 user error.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import traceback
+from pathlib import Path
+
+from . import __version__, engine, scene as scenes, store
+from .errors import ComputationError, UserError
+from .stage import stages
+
+
+def _parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(prog="roughcontact", description="Persson contact mechanics for two rough surfaces.")
+    ap.add_argument("--version", action="version", version=f"roughcontact {__version__}")
+    sub = ap.add_subparsers(dest="command", required=True)
+
+    def scene_command(name, help_text):
+        p = sub.add_parser(name, help=help_text)
+        p.add_argument("scene", nargs="?", help="scene file or built-in scene name (default: the built-in default scene)")
+        p.add_argument("--outdir", type=Path, help="where results go (default: outputs/<scene name>)")
+        return p
+
+    run = scene_command("run", "compute what the scene asks for, reusing up-to-date results")
+    run.add_argument("--force", action="append", default=[], metavar="STAGE", help="recompute STAGE even if fresh ('all': every stage)")
+    run.add_argument("--quiet", action="store_true", help="no progress messages")
+    scene_command("plan", "say for each stage whether it is fresh, stale (and why) or missing; exit 1 if anything would run")
+    plot = scene_command("plot", "draw the figures of the scene's stages as PNG (computing what is missing)")
+    plot.add_argument("--quiet", action="store_true")
+    show = sub.add_parser("show", help="what is in a result file and where it came from")
+    show.add_argument("file", type=Path)
+    sub.add_parser("scenes", help="list the built-in scenes")
+    ref = sub.add_parser("reference", help="print the scene-file reference (Markdown)")
+    del ref
+    return ap
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = _parser().parse_args(argv)
+    try:
+        return _dispatch(args)
+    except UserError as exc:
+        print(f"roughcontact: error: {exc.format()}", file=sys.stderr)
+        return 2
+    except ComputationError as exc:
+        print(f"roughcontact: computation failed: {exc}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print("roughcontact: interrupted; nothing half-written is kept", file=sys.stderr)
+        return 1
+    except Exception:  # an internal error: say so, with the traceback for the bug report
+        traceback.print_exc()
+        print("roughcontact: internal error (a bug: please report it with the traceback above)", file=sys.stderr)
+        return 1
+
+
+def _dispatch(args) -> int:
+    if args.command == "scenes":
+        for name, path in sorted(scenes.builtin_scenes().items()):
+            print(f"{name:16s} {path}")
+        return 0
+    if args.command == "reference":
+        print(scenes.reference())
+        return 0
+    if args.command == "show":
+        return _show(args.file)
+    sc = scenes.load(args.scene)
+    outdir = args.outdir or engine.default_outdir(sc)
+    if args.command == "plan":
+        plans = engine.plan(sc, outdir)
+        for p in plans:
+            why = f" ({'; '.join(p.reasons)})" if p.reasons else ""
+            print(f"{p.label:28s} {p.status}{why}  {p.path}")
+        return 1 if any(p.status != "fresh" for p in plans) else 0
+    reporter = engine.Reporter(None if getattr(args, "quiet", False) else sys.stderr)
+    if args.command == "run":
+        engine.run(sc, outdir, force=args.force, report=reporter)
+        print(f"results in {outdir}")
+        return 0
+    if args.command == "plot":
+        return _plot(sc, outdir, reporter)
+    raise AssertionError(args.command)
+
+
+def _plot(sc, outdir: Path, reporter) -> int:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    needed = {st.name for st in engine.needed_stages(sc, sc.outputs)}
+    figures = [f for st in stages().values() for f in st.figures if set(f.stages) <= needed]
+    if not figures:
+        raise UserError("none of the scene's stages draws a figure", key="outputs.variables")
+    results = engine.run(sc, outdir, report=reporter)
+    folder = outdir / "figures"
+    folder.mkdir(parents=True, exist_ok=True)
+    for f in figures:
+        fig = f.make(results)
+        target = folder / f"{f.name}.png"
+        tmp = folder / f"{store.TMP_PREFIX}{f.name}.png"
+        fig.savefig(tmp, dpi=130)
+        plt.close(fig)
+        tmp.replace(target)
+        print(f"{f.title}: {target}")
+    return 0
+
+
+def _show(path: Path) -> int:
+    import xarray as xr
+
+    if not path.is_file():
+        raise UserError("no such file", file=str(path))
+    try:
+        ds = xr.open_dataset(path)
+    except Exception as exc:
+        raise UserError(f"not a readable NetCDF file ({exc.__class__.__name__})", file=str(path)) from None
+    with ds:
+        a = ds.attrs
+        print(f"{path}: stage {a.get('stage_name', '?')} v{a.get('stage_version', '?')}, "
+              f"roughcontact {a.get('software_version', '?')} (git {a.get('git_commit', '?')})")
+        print(f"created {a.get('date_created', '?')} from scene {a.get('scene', '?')} [{a.get('scene_variant', '?')}]")
+        print(f"key {a.get('stage_key', '?')}")
+        print("dimensions: " + ", ".join(f"{d}={n}" for d, n in ds.sizes.items()))
+        print("coordinates:")
+        for name, v in ds.coords.items():
+            print(f"  {name:24s} [{v.attrs.get('units', '?')}] {v.attrs.get('long_name', '')}")
+        print("variables:")
+        for name, v in ds.data_vars.items():
+            print(f"  {name:24s} ({', '.join(v.dims)}) [{v.attrs.get('units', '?')}] {v.attrs.get('long_name', '')}")
+        for label, attr in (("parameters", "parameters"), ("upstream", "upstream_keys"), ("input files", "input_files")):
+            if attr in a:
+                try:
+                    text = json.dumps(json.loads(a[attr]), indent=2)
+                except ValueError:
+                    text = a[attr]
+                print(f"{label}: {text}")
+        print(f"history: {a.get('history', '')}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,259 @@
+"""Planning and running the stage graph for a scene.
+
+For each scene (and each of its variants) the engine selects the stages that the requested
+outputs need, computes each stage's content key, compares it with the key stored in the
+existing result, and computes only what is missing or stale, upstream first.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Iterable, TextIO
+
+import xarray as xr
+
+from . import store
+from .errors import UserError
+from .readers import READERS
+from .scene import Scene
+from .stage import Stage, StageInput, producer_of, stages
+
+
+@dataclass
+class StagePlan:
+    """What the engine will do with one stage of one scene variant."""
+
+    stage: Stage
+    variant: str
+    path: Path
+    key: str
+    record: dict
+    status: str  # "fresh" | "stale" | "missing"
+    reasons: list[str] = field(default_factory=list)
+    wanted: frozenset[str] = frozenset()
+    params: dict = field(default_factory=dict)
+    file_paths: dict = field(default_factory=dict)
+    inputs: list[dict] = field(default_factory=list)
+    scene_label: str = ""
+
+    @property
+    def label(self) -> str:
+        return self.stage.name if self.variant == "base" else f"{self.stage.name} [{self.variant}]"
+
+
+def needed_stages(scene: Scene, targets: Iterable[str]) -> list[Stage]:
+    """Stages needed for ``targets`` (variables or stage names), upstream first."""
+    registry = stages()
+    order: list[Stage] = []
+    seen: set[str] = set()
+
+    def visit(st: Stage, trail: tuple[str, ...]):
+        if st.name in trail:
+            raise RuntimeError(f"stage cycle: {' -> '.join(trail + (st.name,))}")
+        if st.name in seen:
+            return
+        ups = st.needed(scene.values) if st.needed else st.requires
+        for up in ups:
+            visit(registry[up], trail + (st.name,))
+        seen.add(st.name)
+        order.append(st)
+
+    for target in targets:
+        visit(producer_of(target), ())
+    return order
+
+
+def result_path(outdir: Path, variant: str, stage: str) -> Path:
+    return outdir / (f"{stage}.nc" if variant == "base" else f"variants/{variant}/{stage}.nc")
+
+
+def default_outdir(scene: Scene) -> Path:
+    return Path("outputs") / scene.name
+
+
+def plan(scene: Scene, outdir: Path, targets: Iterable[str] | None = None, force: Iterable[str] = ()) -> list[StagePlan]:
+    """Plan every needed stage of the scene and of each of its variants."""
+    targets = tuple(targets) if targets is not None else scene.outputs
+    force = set(force)
+    unknown = force - set(stages()) - {"all"}
+    if unknown:
+        raise UserError(f"--force names unknown stage(s): {', '.join(sorted(unknown))}")
+    plans: list[StagePlan] = []
+    for variant, sc in (("base", scene), *scene.variants.items()):
+        keys: dict[str, str] = {}
+        for st in needed_stages(sc, targets):
+            p = _plan_stage(sc, variant, st, outdir, keys, targets, force)
+            keys[st.name] = p.key
+            plans.append(p)
+    return plans
+
+
+def _plan_stage(scene, variant, st, outdir, keys, targets, force) -> StagePlan:
+    params = {name: scene.get(name) for name in st.params}
+    file_paths, inputs = {}, []
+    for f in st.files:
+        value = _dotted(scene, f.param)
+        if value is None:
+            continue
+        file_paths[f.param] = Path(value)
+        inputs.append({"param": f.param, "path": str(value), "sha256": store.file_sha256(Path(value))})
+    upstream = {up: keys[up] for up in (st.needed(scene.values) if st.needed else st.requires)}
+    wanted = frozenset(t for t in targets if t in st.outputs and st.outputs[t].optional)
+    record = {
+        "stage": st.name,
+        "version": st.version,
+        "parameters": params,
+        "upstream": upstream,
+        "inputs": {i["param"]: i["sha256"] for i in inputs},
+        "optional_outputs": sorted(wanted),
+    }
+    key = store.content_key(record)
+    path = result_path(outdir, variant, st.name)
+    stored = store.read_attrs(path)
+    if stored is None:
+        status, reasons = "missing", ["no result yet" if not path.exists() else "existing file is unreadable"]
+    elif stored.get("stage_key") == key and st.name not in force and "all" not in force:
+        status, reasons = "fresh", []
+    else:
+        status = "stale"
+        reasons = _why_stale(stored, record) if stored.get("stage_key") != key else ["forced"]
+    return StagePlan(st, variant, path, key, record, status, reasons, wanted, params, file_paths, inputs, scene.label)
+
+
+def _dotted(scene: Scene, dotted: str):
+    section, _, rest = dotted.partition(".")
+    value = scene.values.get(section)
+    for part in rest.split(".") if rest else ():
+        if not isinstance(value, dict):
+            return None
+        value = value.get(part)
+    return value
+
+
+def _why_stale(stored: dict, record: dict) -> list[str]:
+    import json
+
+    reasons = []
+    if stored.get("stage_version") != record["version"]:
+        reasons.append(f"stage version {stored.get('stage_version')} -> {record['version']}")
+    try:
+        old_params = json.loads(stored.get("parameters", "{}"))
+        old_up = json.loads(stored.get("upstream_keys", "{}"))
+        old_inputs = {i["param"]: i["sha256"] for i in json.loads(stored.get("input_files", "[]"))}
+        old_optional = json.loads(stored.get("optional_outputs", "[]"))
+    except (ValueError, TypeError, KeyError):
+        return ["stored provenance unreadable"]
+    new_params = store.canonical(record["parameters"])
+    for name in sorted(set(old_params) | set(new_params)):
+        if old_params.get(name) != new_params.get(name):
+            reasons.extend(_param_diff(name, old_params.get(name), new_params.get(name)))
+    for name in sorted(set(old_up) | set(record["upstream"])):
+        if old_up.get(name) != record["upstream"].get(name):
+            reasons.append(f"upstream stage {name} changed")
+    for name in sorted(set(old_inputs) | set(record["inputs"])):
+        if old_inputs.get(name) != record["inputs"].get(name):
+            reasons.append(f"input file {name} changed (sha256)")
+    if sorted(old_optional) != record["optional_outputs"]:
+        reasons.append(f"optional outputs {old_optional} -> {record['optional_outputs']}")
+    return reasons or ["key differs"]
+
+
+def _param_diff(name, old, new) -> list[str]:
+    if isinstance(old, dict) and isinstance(new, dict):
+        out = []
+        for k in sorted(set(old) | set(new)):
+            if old.get(k) != new.get(k):
+                out.extend(_param_diff(f"{name}.{k}", old.get(k), new.get(k)))
+        return out
+    return [f"{name}: {_short(old)} -> {_short(new)}"]
+
+
+def _short(value) -> str:
+    text = repr(value)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def _finish(ds: xr.Dataset, p: StagePlan) -> xr.Dataset:
+    """Fill in declared units/long names, check every variable and coordinate has them, add
+    provenance."""
+    st = p.stage
+    declared = {**st.coords, **st.outputs}
+    for name in ds.variables:
+        attrs = ds[name].attrs
+        if name in declared:
+            attrs.setdefault("units", declared[name].units)
+            attrs.setdefault("long_name", declared[name].long_name)
+        missing = [a for a in ("units", "long_name") if a not in attrs]
+        if missing:
+            raise RuntimeError(f"stage {st.name} returned {name!r} without {', '.join(missing)} (a bug in the stage)")
+    undeclared = [v for v in ds.data_vars if v not in st.outputs]
+    if undeclared:
+        raise RuntimeError(f"stage {st.name} returned undeclared variable(s) {undeclared} (a bug in the stage)")
+    extra = dict(ds.attrs)
+    ds.attrs = {**extra, **store.provenance_attrs(
+        stage=st.name, version=st.version, key=p.key, parameters=p.params, upstream=p.record["upstream"],
+        inputs=p.inputs, optional=list(p.wanted), scene=p.scene_label, variant=p.variant)}
+    return ds
+
+
+class Reporter:
+    """Progress messages per stage, on stderr (quiet in tests if asked)."""
+
+    def __init__(self, stream: TextIO | None = sys.stderr):
+        self.stream = stream
+
+    def __call__(self, message: str) -> None:
+        if self.stream is not None:
+            print(message, file=self.stream, flush=True)
+
+    def dask_progress(self):
+        if self.stream is None:
+            return None
+        from dask.diagnostics import ProgressBar
+
+        return ProgressBar(minimum=1.0, out=self.stream)
+
+
+def run(scene: Scene, outdir: Path, targets: Iterable[str] | None = None, force: Iterable[str] = (),
+        report: Reporter | None = None) -> dict[str, dict[str, xr.Dataset]]:
+    """Bring every needed stage up to date; return ``results[variant][stage]`` (in memory)."""
+    report = report or Reporter()
+    plans = plan(scene, outdir, targets, force)
+    scenes = {"base": scene, **scene.variants}
+    store.clean_temporaries(outdir)
+    for folder in {p.path.parent for p in plans}:
+        store.clean_temporaries(folder)
+    results: dict[str, dict[str, xr.Dataset]] = {v: {} for v in scenes}
+    n = len(plans)
+    for i, p in enumerate(plans, start=1):
+        tag = f"[{i}/{n}] {p.label}"
+        if p.status == "fresh":
+            report(f"{tag}: up to date ({p.path})")
+            results[p.variant][p.stage.name] = store.open_result(p.path)
+            continue
+        report(f"{tag}: computing ({'; '.join(p.reasons)})")
+        t0 = time.perf_counter()
+        files = {param: READERS[_reader(p.stage, param)](path) for param, path in p.file_paths.items()}
+        inp = StageInput(
+            params=p.params,
+            upstream={up: results[p.variant][up] for up in p.record["upstream"]},
+            files=files,
+            wanted=p.wanted,
+            chunks=scenes[p.variant].chunks,
+        )
+        ds = _finish(p.stage.compute(inp), p)
+        store.write(ds, p.path, progress=report.dask_progress() if _has_dask(ds) else None)
+        results[p.variant][p.stage.name] = store.open_result(p.path)
+        report(f"{tag}: done in {time.perf_counter() - t0:.2f} s -> {p.path}")
+    return results
+
+
+def _reader(st: Stage, param: str) -> str:
+    return next(f.reader for f in st.files if f.param == param)
+
+
+def _has_dask(ds: xr.Dataset) -> bool:
+    return any(v.chunks is not None for v in ds.variables.values())

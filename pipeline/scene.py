@@ -1,0 +1,198 @@
+"""Scene files (TOML): what the user wants computed, validated against the stages' schema.
+
+Layout::
+
+    name = "default"                 # optional; names the output folder
+    description = "..."              # optional
+    [substrate] / [solid] / [interface] / [material] / [load] / ...   (declared by stages)
+    [outputs]  variables = ["contact_area_ratio", ...]
+    [numerics] points_per_decade = 50, ..., chunks = { p = 1000 }
+    [variants.NAME]  overrides of any of the above, computed as well (e.g. substrate_only)
+
+Unknown keys are errors with a did-you-mean; every quantity is converted to SI.
+"""
+
+from __future__ import annotations
+
+import copy
+import tomllib
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+from .errors import UserError
+from .schema import Param, Section, did_you_mean
+from .stage import register_section, sections
+
+register_section(
+    Section(
+        "outputs",
+        (Param("variables", "list", default=("contact_area_ratio",),
+               doc="variables (or stage names) to compute; only the stages they need run"),),
+        doc="what the scene asks for",
+    )
+)
+
+TOP_LEVEL = {"name": "str", "description": "str"}
+
+
+@dataclass
+class Scene:
+    """A validated scene: every value in SI, keyed by section then parameter."""
+
+    name: str
+    values: dict[str, Any]
+    path: Path | None = None
+    description: str = ""
+    chunks: dict[str, int] = field(default_factory=dict)
+    variants: dict[str, "Scene"] = field(default_factory=dict)
+    variant: str = "base"
+
+    @property
+    def outputs(self) -> tuple[str, ...]:
+        return tuple(self.values["outputs"]["variables"])
+
+    def get(self, dotted: str):
+        """Value of ``section`` (a dict or None) or ``section.key``."""
+        section, _, key = dotted.partition(".")
+        if section not in self.values:
+            raise KeyError(dotted)
+        value = self.values[section]
+        if not key:
+            return value
+        if value is None:
+            return None
+        return value.get(key)
+
+    @property
+    def label(self) -> str:
+        return f"{self.path or '<built-in ' + self.name + '>'}"
+
+
+def default_scene_path() -> Path:
+    return Path(str(resources.files("pipeline") / "scenes" / "default.toml"))
+
+
+def builtin_scenes() -> dict[str, Path]:
+    folder = resources.files("pipeline") / "scenes"
+    return {Path(str(p)).stem: Path(str(p)) for p in folder.iterdir() if str(p).endswith(".toml")}
+
+
+def resolve(scene: str | None) -> Path:
+    """A scene argument: a file path, or the name of a built-in scene, or None (default)."""
+    if scene is None:
+        return default_scene_path()
+    path = Path(scene)
+    if path.is_file():
+        return path
+    builtin = builtin_scenes()
+    if scene in builtin:
+        return builtin[scene]
+    raise UserError(
+        f"no scene file {scene!r} (built-in scenes: {', '.join(sorted(builtin))}){did_you_mean(scene, builtin)}"
+    )
+
+
+def load(scene: str | Path | None) -> Scene:
+    """Read and validate a scene file (or a built-in scene name; None: the default scene)."""
+    path = resolve(str(scene) if scene is not None else None)
+    try:
+        raw = tomllib.loads(path.read_text(encoding="utf-8"))
+    except tomllib.TOMLDecodeError as exc:
+        raise UserError(f"malformed TOML: {exc}", file=str(path)) from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise UserError(f"cannot read: {exc}", file=str(path)) from None
+    return from_dict(raw, path)
+
+
+def from_dict(raw: dict, path: Path | None = None, *, variant: str = "base") -> Scene:
+    """Validate a scene given as a (TOML-like) dict."""
+    try:
+        return _from_dict(raw, path, variant)
+    except UserError as exc:
+        raise exc.located(file=str(path) if path else None) from None
+
+
+def _from_dict(raw: dict, path: Path | None, variant: str) -> Scene:
+    schema = sections()
+    raw = copy.deepcopy(raw)
+    variants_raw = raw.pop("variants", {}) if variant == "base" else {}
+    for key, value in raw.items():
+        if key in TOP_LEVEL:
+            if not isinstance(value, str):
+                raise UserError(f"expected a string, got {value!r}", key=key)
+        elif key not in schema:
+            raise UserError(f"unknown key {key!r}{did_you_mean(key, list(schema) + list(TOP_LEVEL) + ['variants'])}", key=key)
+    numerics = raw.get("numerics") if isinstance(raw.get("numerics"), dict) else None
+    chunks = _chunks(numerics.pop("chunks", {}) if numerics is not None else {})
+    base_dir = path.parent if path else None
+    values = {name: section.convert(raw.get(name), base_dir) for name, section in schema.items()}
+    scene = Scene(
+        name=raw.get("name") or (path.stem if path else "scene"),
+        description=raw.get("description", ""),
+        values=values,
+        path=path,
+        chunks=chunks,
+        variant=variant,
+    )
+    if not isinstance(variants_raw, dict):
+        raise UserError("expected tables [variants.NAME]", key="variants")
+    base_raw = copy.deepcopy(raw)
+    if numerics is not None:
+        base_raw["numerics"]["chunks"] = dict(chunks)
+    for name, override in variants_raw.items():
+        if not isinstance(override, dict):
+            raise UserError("expected a table of overrides", key=f"variants.{name}")
+        if not name.isidentifier() or name == "base":
+            raise UserError("a variant name must be an identifier other than 'base'", key=f"variants.{name}")
+        try:
+            scene.variants[name] = _from_dict(_merge(base_raw, override), path, name)
+        except UserError as exc:
+            raise UserError(exc.message, key=f"variants.{name}.{exc.key}" if exc.key else f"variants.{name}") from None
+        scene.variants[name].name = scene.name
+    return scene
+
+
+def _merge(base: dict, override: dict) -> dict:
+    """Overlay ``override`` on ``base``; a table that sets ``kind`` replaces the whole table."""
+    out = copy.deepcopy(base)
+    for key, value in override.items():
+        if isinstance(value, dict) and isinstance(out.get(key), dict) and "kind" not in value:
+            out[key] = _merge(out[key], value)
+        else:
+            out[key] = copy.deepcopy(value)
+    return out
+
+
+def _chunks(raw) -> dict[str, int]:
+    if not isinstance(raw, dict):
+        raise UserError("expected a table like { p = 1000 }", key="numerics.chunks")
+    for dim, size in raw.items():
+        if isinstance(size, bool) or not isinstance(size, int) or size < 0:
+            raise UserError(f"chunk size must be a whole number >= 0, got {size!r}", key=f"numerics.chunks.{dim}")
+        if dim == "q":
+            raise UserError("q is the core dimension of the integrals and is never chunked", key="numerics.chunks.q")
+    return dict(raw)
+
+
+def reference() -> str:
+    """The scene-file reference in Markdown, generated from the registered sections."""
+    lines = []
+    for name, section in sections().items():
+        lines.append(f"### [{name}]" + (" (optional)" if section.optional else ""))
+        if section.doc:
+            lines.append(f"{section.doc}.\n")
+        lines.append("| key | kind | units | default | meaning |\n|---|---|---|---|---|")
+        groups = [("", section.params)]
+        if section.discriminator:
+            groups += [(f"{section.discriminator} = \"{k}\": ", ps) for k, ps in section.variants.items()]
+        for prefix, params in groups:
+            for p in params:
+                from .schema import REQUIRED
+
+                default = "required" if p.default is REQUIRED else ("-" if p.default is None else f"`{p.default}`")
+                choices = f" ({', '.join(map(str, p.choices))})" if p.choices else ""
+                lines.append(f"| `{p.name}` | {p.kind} | {p.units or '-'} | {default} | {prefix}{p.doc}{choices} |")
+        lines.append("")
+    return "\n".join(lines)

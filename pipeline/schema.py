@@ -1,0 +1,238 @@
+"""Declarations of scene parameters and sections, and their validation.
+
+A stage module declares the scene sections it owns (names, units, bounds, defaults);
+the engine collects them into the scene schema. Values are converted to SI here, so
+stages only ever see SI floats, numpy arrays, strings and paths.
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Mapping
+
+import numpy as np
+
+from .errors import UserError
+from .units import to_si
+
+REQUIRED = object()
+
+#: Parameter kinds:
+#:   quantity  one number with units (``units`` is the SI target)
+#:   sweep     a quantity, or a list / range of them (a list becomes a sweep dimension)
+#:   int, bool, str, choice, path (a file, resolved against the scene's folder)
+#:   list      a list of strings; intlist: a list of whole numbers
+KINDS = ("quantity", "sweep", "int", "bool", "str", "choice", "path", "list", "intlist")
+
+
+@dataclass(frozen=True)
+class Param:
+    """One scene key.
+
+    Parameters
+    ----------
+    name
+        Key inside its section.
+    kind
+        One of :data:`KINDS`.
+    units
+        SI units of a quantity or sweep ("" for dimensionless).
+    default
+        Default value (in SI for quantities); :data:`REQUIRED` if the user must give it.
+    lo, hi, lo_open, hi_open
+        Bounds (SI); ``lo_open`` means ``value > lo`` is required rather than ``>=``.
+    choices
+        Allowed strings for ``choice``; also extra allowed strings for a sweep (e.g. ``"all"``).
+    doc
+        One-line description, shown in the scene reference.
+    """
+
+    name: str
+    kind: str = "quantity"
+    units: str = ""
+    default: Any = REQUIRED
+    lo: float | None = None
+    hi: float | None = None
+    lo_open: bool = False
+    hi_open: bool = False
+    choices: tuple = ()
+    doc: str = ""
+
+    def __post_init__(self):
+        if self.kind not in KINDS:
+            raise ValueError(f"unknown parameter kind {self.kind!r}")
+
+    # -- validation ---------------------------------------------------------------------
+    def convert(self, raw: Any, key: str, base_dir: Path | None):
+        """Validate and convert ``raw`` (as read from TOML) to its SI value."""
+        k = self.kind
+        if k == "quantity":
+            return self._bounded(to_si(raw, self.units, key=key), key)
+        if k == "sweep":
+            if isinstance(raw, str) and raw in self.choices:
+                return raw
+            values = parse_sweep(raw, self.units, key)
+            for v in np.atleast_1d(values):
+                self._bounded(float(v), key)
+            return values
+        if k == "int":
+            if isinstance(raw, bool) or not isinstance(raw, int):
+                raise UserError(f"expected a whole number, got {raw!r}", key=key)
+            return int(self._bounded(raw, key))
+        if k == "bool":
+            if not isinstance(raw, bool):
+                raise UserError(f"expected true or false, got {raw!r}", key=key)
+            return raw
+        if k in ("str", "choice"):
+            if not isinstance(raw, str):
+                raise UserError(f"expected a string, got {raw!r}", key=key)
+            if k == "choice" and raw not in self.choices:
+                raise UserError(f"{raw!r} is not one of {', '.join(map(repr, self.choices))}{_did_you_mean(raw, self.choices)}", key=key)
+            return raw
+        if k == "list":
+            if isinstance(raw, str):
+                raw = [raw]
+            if not isinstance(raw, list) or not all(isinstance(x, str) for x in raw):
+                raise UserError(f"expected a list of strings, got {raw!r}", key=key)
+            return tuple(raw)
+        if k == "intlist":
+            if not isinstance(raw, list) or not all(isinstance(x, int) and not isinstance(x, bool) for x in raw):
+                raise UserError(f"expected a list of whole numbers, got {raw!r}", key=key)
+            for x in raw:
+                self._bounded(x, key)
+            return tuple(raw)
+        if k == "path":
+            if not isinstance(raw, str):
+                raise UserError(f"expected a file path, got {raw!r}", key=key)
+            path = Path(raw).expanduser()
+            if not path.is_absolute() and base_dir is not None:
+                path = base_dir / path
+            if not path.is_file():
+                raise UserError(f"file {str(path)!r} does not exist", key=key)
+            return path.resolve()
+        raise AssertionError(k)
+
+    def _bounded(self, v: float, key: str) -> float:
+        if isinstance(v, float) and not math.isfinite(v):
+            raise UserError(f"{v} is not a finite number", key=key)
+        u = f" {self.units}" if self.units else ""
+        if self.lo is not None and (v <= self.lo if self.lo_open else v < self.lo):
+            raise UserError(f"must be {'>' if self.lo_open else '>='} {self.lo:g}{u}, got {v:g}{u}", key=key)
+        if self.hi is not None and (v >= self.hi if self.hi_open else v > self.hi):
+            raise UserError(f"must be {'<' if self.hi_open else '<='} {self.hi:g}{u}, got {v:g}{u}", key=key)
+        return v
+
+
+def parse_sweep(raw: Any, units: str, key: str):
+    """A sweep value: a quantity (-> float), a list of quantities (-> 1-D array), or a range
+    table ``{from = "...", to = "...", num = N, spacing = "log"|"linear"}``; a table with
+    ``values = [...]`` and ``unit = "..."`` gives a list of bare numbers in that unit.
+    """
+    if isinstance(raw, dict):
+        allowed = {"from", "to", "num", "spacing", "values", "unit"}
+        for k in raw:
+            if k not in allowed:
+                raise UserError(f"unknown key {k!r} in a sweep table{_did_you_mean(k, allowed)}", key=f"{key}.{k}")
+        unit = raw.get("unit")
+        if "values" in raw:
+            if set(raw) - {"values", "unit"}:
+                raise UserError("a sweep table has either 'values' or 'from'/'to'/'num', not both", key=key)
+            return parse_sweep_list(raw["values"], units, key, unit)
+        missing = [k for k in ("from", "to", "num") if k not in raw]
+        if missing:
+            raise UserError(f"a range needs 'from', 'to' and 'num' (missing {', '.join(missing)})", key=key)
+        lo = to_si(raw["from"], units, key=f"{key}.from", default_unit=unit)
+        hi = to_si(raw["to"], units, key=f"{key}.to", default_unit=unit)
+        num = raw["num"]
+        if isinstance(num, bool) or not isinstance(num, int) or num < 1:
+            raise UserError(f"'num' must be a whole number >= 1, got {num!r}", key=f"{key}.num")
+        spacing = raw.get("spacing", "log")
+        if spacing == "log":
+            if lo <= 0 or hi <= 0:
+                raise UserError("a log range needs positive 'from' and 'to'", key=key)
+            return np.geomspace(lo, hi, num)
+        if spacing == "linear":
+            return np.linspace(lo, hi, num)
+        raise UserError(f"'spacing' must be 'log' or 'linear', got {spacing!r}", key=f"{key}.spacing")
+    if isinstance(raw, list):
+        return parse_sweep_list(raw, units, key, None)
+    return to_si(raw, units, key=key)
+
+
+def parse_sweep_list(raw, units, key, unit):
+    if not isinstance(raw, list) or not raw:
+        raise UserError("expected a non-empty list", key=key)
+    values = np.array([to_si(v, units, key=f"{key}[{i}]", default_unit=unit) for i, v in enumerate(raw)])
+    if len(np.unique(values)) != len(values):
+        raise UserError("a sweep list must not repeat a value", key=key)
+    return values
+
+
+@dataclass(frozen=True)
+class Section:
+    """A scene section (a TOML table) with its parameters.
+
+    ``discriminator`` names a key (e.g. ``kind``) whose value selects one of ``variants``
+    (extra parameters per kind); ``check`` validates relations between parameters and
+    raises :class:`UserError` naming the key. ``optional`` sections may be absent (value None).
+    """
+
+    name: str
+    params: tuple[Param, ...] = ()
+    doc: str = ""
+    optional: bool = False
+    discriminator: str | None = None
+    variants: Mapping[str, tuple[Param, ...]] = field(default_factory=dict)
+    check: Callable[[dict, str], None] | None = None
+
+    def params_for(self, kind: str | None) -> tuple[Param, ...]:
+        return self.params + tuple(self.variants.get(kind, ())) if kind is not None else self.params
+
+    def convert(self, raw: Any, base_dir: Path | None, key: str | None = None) -> dict | None:
+        key = key or self.name
+        if raw is None:
+            if self.optional:
+                return None
+            raw = {}
+        if not isinstance(raw, dict):
+            raise UserError(f"expected a table [{key}], got {raw!r}", key=key)
+        kind = None
+        if self.discriminator is not None:
+            if self.discriminator not in raw:
+                raise UserError(f"needs '{self.discriminator}' (one of {', '.join(map(repr, self.variants))})", key=key)
+            kind = raw[self.discriminator]
+            if kind not in self.variants:
+                raise UserError(
+                    f"{self.discriminator} = {kind!r} is not one of {', '.join(map(repr, self.variants))}"
+                    f"{_did_you_mean(str(kind), self.variants)}",
+                    key=f"{key}.{self.discriminator}",
+                )
+        params = {p.name: p for p in self.params_for(kind)}
+        out: dict[str, Any] = {}
+        if kind is not None:
+            out[self.discriminator] = kind
+        for k in raw:
+            if k != self.discriminator and k not in params:
+                raise UserError(f"unknown key {k!r}{_did_you_mean(k, params)}", key=f"{key}.{k}")
+        for name, p in params.items():
+            if name in raw:
+                out[name] = p.convert(raw[name], f"{key}.{name}", base_dir)
+            elif p.default is not REQUIRED:
+                out[name] = p.default
+        missing = [n for n, p in params.items() if n not in out]
+        if missing:
+            raise UserError(f"missing required key(s): {', '.join(missing)}", key=key)
+        if self.check is not None:
+            self.check(out, key)
+        return out
+
+
+def _did_you_mean(word: str, options) -> str:
+    close = difflib.get_close_matches(word, list(options), n=1, cutoff=0.6)
+    return f" (did you mean {close[0]!r}?)" if close else ""
+
+
+did_you_mean = _did_you_mean

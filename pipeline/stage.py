@@ -1,0 +1,198 @@
+"""How a stage declares itself to the engine, and what it is handed when it runs.
+
+A stage is a pure function ``compute(StageInput) -> xarray.Dataset`` plus declarations:
+its name and version, the upstream stages it needs, the scene keys it reads, the files it
+needs read, and its output variables with units and long names. The engine does planning,
+hashing, caching, I/O, chunking and scheduling; a stage does none of these.
+
+Register a stage with :func:`register` at import time of its module in :mod:`stages`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Callable, Mapping
+
+import numpy as np
+import xarray as xr
+
+from .errors import UserError
+from .schema import Param, Section
+
+
+@dataclass(frozen=True)
+class Var:
+    """An output variable (or coordinate) of a stage: its units and long name.
+
+    ``optional`` variables are produced only when the scene asks for them by name.
+    """
+
+    units: str
+    long_name: str
+    optional: bool = False
+
+
+@dataclass(frozen=True)
+class FileInput:
+    """A file the engine must read for the stage.
+
+    ``param`` is the dotted scene key holding the path (e.g. ``substrate.path``);
+    ``reader`` is ``"table"`` (text/CSV columns, :func:`pipeline.readers.read_table`) or
+    ``"auto"`` (NetCDF by suffix, else table). ``options`` maps reader options to scene keys.
+    """
+
+    param: str
+    reader: str = "auto"
+    options: Mapping[str, str] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Figure:
+    """A figure a stage can draw from stored results.
+
+    ``make(results) -> matplotlib.figure.Figure`` where ``results[variant][stage]`` is a
+    Dataset (``variant`` is ``"base"`` or a name from the scene's ``[variants]``).
+    ``stages`` are the stages it needs; the engine makes sure they are up to date.
+    """
+
+    name: str
+    title: str
+    stages: tuple[str, ...]
+    make: Callable[[Mapping[str, Mapping[str, xr.Dataset]]], Any]
+    variants: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class Stage:
+    """Declaration of one stage of the pipeline."""
+
+    name: str
+    version: str
+    compute: Callable[["StageInput"], xr.Dataset]
+    outputs: Mapping[str, Var]
+    coords: Mapping[str, Var] = field(default_factory=dict)
+    requires: tuple[str, ...] = ()
+    params: tuple[str, ...] = ()
+    files: tuple[FileInput, ...] = ()
+    figures: tuple[Figure, ...] = ()
+    doc: str = ""
+    #: optional ``needed(scene_values) -> tuple[str, ...]``: upstream stages needed for this
+    #: particular scene, when it is a subset of ``requires`` (e.g. a stage that only needs a
+    #: measured input when the scene uses one).
+    needed: Callable[[Mapping[str, Any]], tuple[str, ...]] | None = None
+
+
+@dataclass
+class StageInput:
+    """What the engine hands a stage's ``compute``.
+
+    Attributes
+    ----------
+    params
+        The values of the declared scene keys, in SI, keyed by dotted path.
+    upstream
+        Results of the upstream stages, keyed by stage name.
+    files
+        Loaded input files keyed by the scene key of their path (see :class:`FileInput`).
+    wanted
+        Names of the optional output variables the scene asked for.
+    chunks
+        Dask chunk sizes per sweep dimension (from the scene's numerics); 0 or absent: unchunked.
+    """
+
+    params: Mapping[str, Any]
+    upstream: Mapping[str, xr.Dataset] = field(default_factory=dict)
+    files: Mapping[str, Any] = field(default_factory=dict)
+    wanted: frozenset[str] = frozenset()
+    chunks: Mapping[str, int] = field(default_factory=dict)
+
+    def __getitem__(self, key: str):
+        return self.params[key]
+
+    def sweep(self, dim: str, values, units: str, long_name: str) -> xr.DataArray:
+        """A sweep coordinate as a DataArray: a 1-D array becomes dimension ``dim`` (dask-chunked
+        when the scene sets a chunk size for it); a scalar stays a scalar coordinate."""
+        values = np.asarray(values, dtype=float)
+        attrs = {"units": units, "long_name": long_name}
+        if values.ndim == 0:
+            return xr.DataArray(values, name=dim, attrs=attrs)
+        da = xr.DataArray(values, dims=(dim,), coords={dim: (dim, values, attrs)}, name=dim, attrs=attrs)
+        size = int(self.chunks.get(dim, 0) or 0)
+        if size and size < values.size:
+            da = da.chunk({dim: size})
+        return da
+
+
+_STAGES: dict[str, Stage] = {}
+_SECTIONS: dict[str, Section] = {}
+
+
+def register(stage: Stage) -> Stage:
+    """Add a stage to the registry (at import of its module). Names are unique."""
+    if stage.name in _STAGES and _STAGES[stage.name] is not stage:
+        raise ValueError(f"stage {stage.name!r} registered twice")
+    _STAGES[stage.name] = stage
+    return stage
+
+
+def register_section(section: Section) -> Section:
+    """Add a scene section to the schema. Names are unique."""
+    if section.name in _SECTIONS and _SECTIONS[section.name] is not section:
+        raise ValueError(f"scene section {section.name!r} registered twice")
+    _SECTIONS[section.name] = section
+    return section
+
+
+def register_params(section_name: str, *params: Param, doc: str = "") -> None:
+    """Add parameters to a shared section (e.g. ``numerics``), creating it if needed.
+
+    Several stages put their resolution settings in ``[numerics]``; names must not clash.
+    """
+    import dataclasses
+
+    current = _SECTIONS.get(section_name, Section(section_name, doc=doc))
+    names = {p.name for p in current.params}
+    for p in params:
+        if p.name in names:
+            if any(q == p for q in current.params):
+                continue
+            raise ValueError(f"parameter {section_name}.{p.name} registered twice")
+        names.add(p.name)
+    new = tuple(p for p in params if p not in current.params)
+    _SECTIONS[section_name] = dataclasses.replace(current, params=current.params + new)
+
+
+def stages() -> dict[str, Stage]:
+    _load_plugins()
+    return dict(_STAGES)
+
+
+def sections() -> dict[str, Section]:
+    _load_plugins()
+    return dict(_SECTIONS)
+
+
+def producer_of(variable: str) -> Stage:
+    """The stage that outputs ``variable`` (or is named ``variable``)."""
+    all_stages = stages()
+    if variable in all_stages:
+        return all_stages[variable]
+    for st in all_stages.values():
+        if variable in st.outputs:
+            return st
+    known = sorted(set(all_stages) | {v for s in all_stages.values() for v in s.outputs})
+    from .schema import did_you_mean
+
+    raise UserError(f"no stage produces {variable!r}{did_you_mean(variable, known)}", key="outputs.variables")
+
+
+def _load_plugins() -> None:
+    """Import every module of the :mod:`stages` package so that it registers itself."""
+    import importlib
+    import pkgutil
+
+    import stages as pkg
+
+    for mod in pkgutil.iter_modules(pkg.__path__):
+        if not mod.name.startswith("_"):
+            importlib.import_module(f"stages.{mod.name}")

@@ -1,0 +1,164 @@
+"""The result store: one NetCDF file per stage, written atomically, with provenance.
+
+Every file carries CF-style metadata (``Conventions``, ``history``, ``units`` and
+``long_name`` on every variable and coordinate) and the provenance needed to decide
+whether it can be reused: the stage's content key, its parameters, upstream keys and the
+hashes of its input files.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import functools
+import hashlib
+import json
+import os
+import subprocess
+import tempfile
+from pathlib import Path
+from typing import Any, Mapping
+
+import numpy as np
+import xarray as xr
+
+from . import __version__
+
+TMP_PREFIX = ".tmp-"
+
+
+def canonical(value: Any):
+    """A JSON-able, deterministic form of a parameter value (SI floats, lists, strings)."""
+    if isinstance(value, Mapping):
+        return {str(k): canonical(v) for k, v in sorted(value.items())}
+    if isinstance(value, (list, tuple)):
+        return [canonical(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return [canonical(v) for v in value.tolist()] if value.ndim else canonical(value.item())
+    if isinstance(value, (np.floating, float)):
+        return float(value)
+    if isinstance(value, (np.integer,)):
+        return int(value)
+    if isinstance(value, Path):
+        return str(value)
+    return value
+
+
+def dumps(value: Any) -> str:
+    return json.dumps(canonical(value), sort_keys=True, separators=(",", ":"))
+
+
+def content_key(record: Mapping[str, Any]) -> str:
+    """sha256 of the canonical JSON of a stage's identity (name, version, parameters,
+    upstream keys, input file hashes, requested optional outputs)."""
+    return hashlib.sha256(dumps(record).encode()).hexdigest()
+
+
+def file_sha256(path: Path) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+@functools.cache
+def git_commit() -> str:
+    """Commit of the roughcontact source tree, where it is a git checkout ('unknown' otherwise)."""
+    here = Path(__file__).resolve().parent.parent
+    try:
+        out = subprocess.run(["git", "-C", str(here), "rev-parse", "HEAD"], capture_output=True, text=True, timeout=5)
+        if out.returncode == 0:
+            dirty = subprocess.run(["git", "-C", str(here), "status", "--porcelain", "--untracked-files=no"],
+                                   capture_output=True, text=True, timeout=5).stdout.strip()
+            return out.stdout.strip() + ("-dirty" if dirty else "")
+    except (OSError, subprocess.SubprocessError):
+        pass
+    return "unknown"
+
+
+def utc_now() -> str:
+    return _dt.datetime.now(_dt.timezone.utc).replace(microsecond=0).isoformat().replace("+00:00", "Z")
+
+
+def provenance_attrs(*, stage: str, version: str, key: str, parameters: Mapping, upstream: Mapping[str, str],
+                     inputs: list[dict], optional: list[str], scene: str, variant: str) -> dict[str, str]:
+    now = utc_now()
+    return {
+        "Conventions": "CF-1.11",
+        "title": f"roughcontact stage '{stage}'",
+        "institution": "roughcontact",
+        "source": f"roughcontact {__version__}",
+        "history": f"{now}: roughcontact {__version__} computed stage {stage} v{version} "
+                   f"(scene {scene}, variant {variant}, key {key[:12]})",
+        "software_version": __version__,
+        "git_commit": git_commit(),
+        "stage_name": stage,
+        "stage_version": version,
+        "stage_key": key,
+        "parameters": dumps(parameters),
+        "upstream_keys": dumps(upstream),
+        "input_files": dumps(inputs),
+        "optional_outputs": dumps(sorted(optional)),
+        "scene": scene,
+        "scene_variant": variant,
+        "date_created": now,
+    }
+
+
+def _encodable(ds: xr.Dataset) -> xr.Dataset:
+    """Attributes NetCDF can hold (str, numbers); None and booleans become strings."""
+    def clean(attrs):
+        return {k: (str(v) if v is None or isinstance(v, (bool, np.bool_)) else v) for k, v in attrs.items()}
+
+    ds = ds.copy()
+    ds.attrs = clean(ds.attrs)
+    for name in ds.variables:
+        ds[name].attrs = clean(ds[name].attrs)
+    return ds
+
+
+def write(ds: xr.Dataset, path: Path, progress=None) -> None:
+    """Write ``ds`` to ``path`` atomically: a temporary file in the same folder, then a rename.
+
+    A crash or kill while writing leaves at most a ``.tmp-*`` file, which is never read as a
+    result (and is removed by :func:`clean_temporaries`).
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f"{TMP_PREFIX}{path.name}.", dir=path.parent)
+    os.close(fd)
+    try:
+        delayed = _encodable(ds).to_netcdf(tmp, engine="netcdf4", compute=progress is None)
+        if progress is not None:
+            with progress:
+                delayed.compute()
+        with open(tmp, "rb+") as fh:
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def clean_temporaries(folder: Path) -> None:
+    """Remove temporaries that a killed run left behind."""
+    if folder.is_dir():
+        for leftover in folder.glob(f"{TMP_PREFIX}*"):
+            leftover.unlink(missing_ok=True)
+
+
+def read_attrs(path: Path) -> dict | None:
+    """Global attributes of a stored result, or None if the file is missing or unreadable."""
+    if not Path(path).is_file():
+        return None
+    try:
+        with xr.open_dataset(path) as ds:
+            return dict(ds.attrs)
+    except Exception:  # a truncated or foreign file is simply not a valid result
+        return None
+
+
+def open_result(path: Path) -> xr.Dataset:
+    """Load a stored result fully into memory (the file is closed afterwards)."""
+    with xr.open_dataset(path) as ds:
+        return ds.load()

@@ -1,0 +1,106 @@
+"""The one unit parser: quantities given as strings ("1 nm", "77.2 GPa", "2e8 1/m") -> SI floats.
+
+Everything inside roughcontact is SI; this module is the only place that talks to pint.
+"""
+
+from __future__ import annotations
+
+import functools
+import re
+
+import numpy as np
+import pint
+
+from .errors import UserError
+
+_NUMBER = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(.*?)\s*$")
+
+
+@functools.cache
+def registry() -> pint.UnitRegistry:
+    ureg = pint.UnitRegistry()
+    ureg.define("angstrom_alias = angstrom = Å")
+    return ureg
+
+
+def _unit(text: str, key: str | None) -> pint.Unit:
+    try:
+        return registry().Unit(text)
+    except Exception as exc:  # pint raises several types for unparsable units
+        raise UserError(f"cannot read unit {text!r} ({exc.__class__.__name__})", key=key) from None
+
+
+def is_dimensionless(units: str) -> bool:
+    return units in ("", "1") or _unit(units, None).dimensionless
+
+
+def to_si(value, units: str, *, key: str | None = None, default_unit: str | None = None) -> float:
+    """Convert a scalar quantity to a float in the SI ``units``.
+
+    Parameters
+    ----------
+    value
+        A number or a string ``"<number> <unit>"``. A bare number is accepted only when
+        ``units`` is dimensionless or ``default_unit`` is given.
+    units
+        Target SI units, e.g. ``"m"``, ``"Pa"``, ``"1/m"``, ``"m^4"``, ``""``.
+    key
+        The scene key, for the error message.
+    default_unit
+        Unit of a bare number (e.g. from a ``unit =`` entry next to a list).
+    """
+    if isinstance(value, bool):
+        raise UserError(f"expected a quantity in {units or 'dimensionless'} units, got {value!r}", key=key)
+    if isinstance(value, (int, float, np.number)):
+        if default_unit is not None:
+            return _convert(float(value), default_unit, units, key)
+        if is_dimensionless(units):
+            return float(value)
+        raise UserError(
+            f"{value!r} has no units; write it with units, e.g. \"{value} {_example_unit(units)}\"", key=key
+        )
+    if not isinstance(value, str):
+        raise UserError(f"expected a number or a quantity string, got {type(value).__name__}", key=key)
+    m = _NUMBER.match(value)
+    if not m:
+        raise UserError(f"cannot read quantity {value!r}; write e.g. \"1.5 {_example_unit(units)}\"", key=key)
+    number, unit_text = float(m.group(1)), m.group(2)
+    if not unit_text:
+        if default_unit is not None:
+            return _convert(number, default_unit, units, key)
+        if is_dimensionless(units):
+            return number
+        raise UserError(
+            f"{value!r} has no units; write it with units, e.g. \"{value} {_example_unit(units)}\"", key=key
+        )
+    return _convert(number, unit_text, units, key)
+
+
+def _convert(number: float, unit_text: str, units: str, key: str | None) -> float:
+    ureg = registry()
+    src = _unit(unit_text, key)
+    dst = _unit(units, key) if units not in ("", "1") else ureg.dimensionless
+    try:
+        return float(ureg.Quantity(number, src).to(dst).magnitude)
+    except pint.DimensionalityError:
+        raise UserError(
+            f"'{number:g} {unit_text}' is not convertible to {units or 'a dimensionless number'}", key=key
+        ) from None
+
+
+def array_to_si(values, unit_text: str, units: str, *, key: str | None = None) -> np.ndarray:
+    """Convert an array given in ``unit_text`` to SI ``units`` (e.g. a file column)."""
+    factor = _convert(1.0, unit_text, units, key) if unit_text else 1.0
+    if unit_text and registry().Unit(unit_text).dimensionality and not _is_multiplicative(unit_text):
+        raise UserError(f"offset unit {unit_text!r} is not allowed for a column", key=key)
+    return np.asarray(values, dtype=float) * factor
+
+
+def _is_multiplicative(unit_text: str) -> bool:
+    return registry().Quantity(1.0, unit_text)._is_multiplicative
+
+
+def _example_unit(units: str) -> str:
+    return {"m": "nm", "Pa": "MPa", "1/m": "1/m", "m^4": "m^4", "J/m^2": "J/m^2", "K": "K", "m/s": "m/s"}.get(
+        units, units or ""
+    )

@@ -1,0 +1,285 @@
+"""Non-adhesive contact: G(zeta), relative contact area A/A0(p, zeta) and the stress
+distribution P(sigma; p, zeta).
+
+Physics: ``equations.md`` section 2 (seed eqs 1-2, 16-20, 53); Persson, J. Chem. Phys. 115,
+3840 (2001). For two rough surfaces the combined PSD of eq 52 replaces C(q) (eq 53).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+from scipy.special import erf
+
+from pipeline.errors import UserError
+from pipeline.schema import Param, Section
+from pipeline.stage import Figure, Stage, StageInput, Var, register, register_params, register_section
+
+from .quadrature import integral_to
+
+# ----------------------------------------------------------------------------------------
+# Kernels
+# ----------------------------------------------------------------------------------------
+
+
+def effective_modulus(E, nu):
+    """E* = E / (1 - nu^2) (Pa), seed eq 3."""
+    return E / (1.0 - nu * nu)
+
+
+def persson_G(q, C, q_upper, E_star):
+    """G(zeta) = (pi/4) E*^2 \\int_{qL}^{zeta qL} q^3 C(q) dq  (Pa^2), seed eq 17 / eq 2.
+
+    Parameters
+    ----------
+    q : array (n,)
+        Wavenumber grid (1/m), q[0] = qL.
+    C : array (..., n)
+        PSD on the grid (m^4).
+    q_upper : array (m,)
+        Upper limits zeta qL (1/m), within the grid.
+    E_star : float
+        Effective modulus (Pa).
+
+    Returns
+    -------
+    array (..., m)
+        G in Pa^2.
+
+    References
+    ----------
+    equations.md section 2; Persson, J. Chem. Phys. 115, 3840 (2001).
+    """
+    return (np.pi / 4.0) * E_star**2 * integral_to(q, np.asarray(q) ** 3 * C, q_upper)
+
+
+def contact_area_ratio(p, G):
+    """Relative contact area A/A0 = erf(p / (2 sqrt G)), seed eq 19 (dimensionless).
+
+    G = 0 (no roughness at these scales) gives full contact, A/A0 = 1 for p > 0.
+    Small p: A/A0 ~ p / sqrt(pi G) (eq 20).
+
+    Parameters
+    ----------
+    p : array
+        Nominal pressure (Pa), > 0.
+    G : array
+        Persson's G (Pa^2), >= 0.
+    """
+    with np.errstate(divide="ignore", invalid="ignore"):
+        arg = np.where(G > 0, p / (2.0 * np.sqrt(np.where(G > 0, G, 1.0))), np.inf)
+    return erf(arg)
+
+
+def stress_distribution(sigma, p, G):
+    """Stress distribution P(sigma) at nominal pressure p (1/Pa), seed eq 16 in its sinh form.
+
+    P = (pi G)^-1/2 exp(-(sigma^2 + p^2)/(4G)) sinh(sigma p / (2G)), evaluated as
+    (4 pi G)^-1/2 exp(-(sigma - p)^2/(4G)) (-expm1(-sigma p / G)), the same function without
+    overflow of sinh or cancellation of the two Gaussians. Zero for sigma < 0. It integrates
+    to A/A0 and its first moment is p.
+
+    With G = 0 the distribution is a delta at sigma = p; on a grid it is returned as a
+    spike of unit mass on the node nearest p (the grid spacing must be uniform there).
+
+    Parameters
+    ----------
+    sigma : array (k,)
+        Stress grid (Pa), uniform.
+    p, G : arrays (broadcast together)
+        Nominal pressure (Pa) and Persson's G (Pa^2).
+
+    Returns
+    -------
+    array (..., k)
+    """
+    sigma = np.asarray(sigma, dtype=float)
+    p = np.asarray(p, dtype=float)[..., None]
+    G = np.asarray(G, dtype=float)[..., None]
+    Gs = np.where(G > 0, G, 1.0)
+    with np.errstate(over="ignore", under="ignore"):
+        smooth = np.exp(-((sigma - p) ** 2) / (4.0 * Gs)) * -np.expm1(-np.maximum(sigma, 0.0) * p / Gs)
+        smooth = np.where(sigma >= 0, smooth / np.sqrt(4.0 * np.pi * Gs), 0.0)
+    if np.all(G > 0):
+        return smooth
+    step = sigma[1] - sigma[0] if sigma.size > 1 else 1.0
+    nearest = np.abs(sigma - p) == np.min(np.abs(sigma - p), axis=-1, keepdims=True)
+    spike = np.where(nearest, 1.0 / step, 0.0)
+    return np.where(G > 0, smooth, spike)
+
+
+# ----------------------------------------------------------------------------------------
+# Scene sections
+# ----------------------------------------------------------------------------------------
+
+register_section(
+    Section(
+        "material",
+        (
+            Param("E", "quantity", "Pa", lo=0.0, lo_open=True, doc="Young's modulus of the elastic solid"),
+            Param("nu", "quantity", "", lo=-1.0, hi=0.5, lo_open=True, doc="Poisson ratio, -1 < nu <= 0.5"),
+        ),
+        doc="the elastic solid (the substrate is rigid)",
+    )
+)
+register_section(
+    Section(
+        "load",
+        (Param("p", "sweep", "Pa", lo=0.0, lo_open=True, doc="nominal pressure; a list or {from, to, num} is a sweep"),),
+        doc="the nominal squeezing pressure",
+    )
+)
+register_section(
+    Section(
+        "contact",
+        (
+            Param("zeta", "sweep", "", default="all", lo=1.0, choices=("all",),
+                  doc="magnification(s) zeta = q/qL; 'all': every node of the q grid"),
+        ),
+        doc="the contact stage",
+    )
+)
+register_params(
+    "numerics",
+    Param("sigma_points", "int", default=401, lo=3, doc="nodes of the stress grid of P(sigma)"),
+    Param("sigma_max", "quantity", "Pa", default=None, lo=0.0, lo_open=True,
+          doc="upper end of the stress grid (default: max p + 8 sqrt(max G))"),
+)
+
+# ----------------------------------------------------------------------------------------
+# Stage wrapper
+# ----------------------------------------------------------------------------------------
+
+
+def _zeta_values(inp: StageInput, q: np.ndarray) -> np.ndarray:
+    zeta = inp["contact.zeta"]
+    if isinstance(zeta, str):
+        return q / q[0]
+    zeta = np.atleast_1d(np.asarray(zeta, dtype=float))
+    top = q[-1] / q[0]
+    if np.any(zeta > top * (1 + 1e-12)):
+        raise UserError(f"magnification {zeta.max():g} beyond the q grid (zeta <= q_max/qL = {top:.6g})", key="contact.zeta")
+    return zeta
+
+
+def compute_contact(inp: StageInput) -> xr.Dataset:
+    psd = inp.upstream["psd"]
+    q = psd["q"].values
+    E_star = float(effective_modulus(inp["material.E"], inp["material.nu"]))
+    zeta_values = _zeta_values(inp, q)
+    zeta = xr.DataArray(zeta_values, dims=("zeta",), attrs={"units": "1", "long_name": "magnification zeta = q/qL"})
+    G = xr.apply_ufunc(
+        persson_G, psd["q"], psd["psd_combined"], zeta * q[0], E_star,
+        input_core_dims=[["q"], ["q"], ["zeta"], []], output_core_dims=[["zeta"]],
+        dask="parallelized", output_dtypes=[float],
+    ).assign_coords(zeta=zeta)
+    G.attrs = {"units": "Pa^2", "long_name": "Persson's G(zeta) = (pi/4) E*^2 int_qL^(zeta qL) q^3 C dq (eq 17)"}
+    p = inp.sweep("p", inp["load.p"], "Pa", "nominal pressure")
+    area = xr.apply_ufunc(contact_area_ratio, p, G, dask="parallelized", output_dtypes=[float])
+    area.attrs = {"units": "1", "long_name": "relative contact area A/A0 = erf(p / 2 sqrt G) (eq 19)"}
+    ds = xr.Dataset({"G": G, "contact_area_ratio": area})
+    ds["E_star"] = xr.DataArray(E_star, attrs={"units": "Pa", "long_name": "effective modulus E* = E/(1 - nu^2)"})
+    if "stress_distribution" in inp.wanted:
+        p_max = float(np.max(inp["load.p"]))
+        sigma_max = inp["numerics.sigma_max"] or p_max + 8.0 * float(np.sqrt(G.max()))
+        sigma = xr.DataArray(np.linspace(0.0, sigma_max, inp["numerics.sigma_points"]), dims=("sigma",),
+                             attrs={"units": "Pa", "long_name": "local normal stress"})
+        dist = xr.apply_ufunc(
+            stress_distribution, sigma, p, G, input_core_dims=[["sigma"], [], []], output_core_dims=[["sigma"]],
+            dask="parallelized", output_dtypes=[float],
+        ).assign_coords(sigma=sigma)
+        dist.attrs = {"units": "1/Pa", "long_name": "stress distribution P(sigma; p, zeta) (eq 16)"}
+        ds["stress_distribution"] = dist
+    return ds
+
+
+# ----------------------------------------------------------------------------------------
+# Figures (seed Figs 3 and 4)
+# ----------------------------------------------------------------------------------------
+
+
+def _cases(results):
+    """(label, Dataset) per curve: the substrate-only variant if present, then each eta."""
+    out = []
+    if "substrate_only" in results:
+        out.append(("substrate only", results["substrate_only"]["contact"]))
+    base = results["base"]["contact"]
+    if "eta" in base.dims:
+        out += [(f"eta = {e:+g}", base.sel(eta=e)) for e in base["eta"].values]
+    else:
+        out.append(("pair", base))
+    return out
+
+
+def _at_zeta(ds, zeta):
+    return ds.sel(zeta=zeta, method="nearest") if "zeta" in ds.dims else ds
+
+
+def figure_contact_area(results, zeta=4.0):
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(5.5, 4.2))
+    for (label, ds), marker in zip(_cases(results), "osx^dv"):
+        ds = _at_zeta(ds, zeta)
+        p = ds["p"].values / float(ds["E_star"])
+        ax.semilogx(p, ds["contact_area_ratio"].values, marker=marker, markersize=3, label=label)
+    ax.set_xlabel("p / E*")
+    ax.set_ylabel("A / A0")
+    ax.set_title(f"Relative contact area, zeta = {zeta:g} (seed Fig. 3)")
+    ax.set_ylim(0, 1.02)
+    ax.legend()
+    fig.tight_layout()
+    return fig
+
+
+def figure_stress_distribution(results, zeta=4.0):
+    import matplotlib.pyplot as plt
+
+    cases = _cases(results)
+    base = _at_zeta(results["base"]["contact"], zeta)
+    if "stress_distribution" not in base:
+        raise UserError("the scene does not ask for 'stress_distribution' (add it to outputs.variables)",
+                        key="outputs.variables")
+    p_all = base["p"].values
+    picks = p_all[np.unique(np.linspace(0, p_all.size - 1, 3).round().astype(int))] if p_all.ndim else [float(p_all)]
+    fig, axes = plt.subplots(1, len(picks), figsize=(4.2 * len(picks), 3.8), squeeze=False)
+    for ax, p in zip(axes[0], picks):
+        for (label, ds), style in zip(cases, ("-", "--", ":", "-.", "-", "--")):
+            ds = _at_zeta(ds, zeta)
+            d = ds["stress_distribution"].sel(p=p, method="nearest") if "p" in ds["stress_distribution"].dims else ds["stress_distribution"]
+            E_star = float(ds["E_star"])
+            ax.plot(d["sigma"].values / E_star, d.values * E_star, style, label=label)
+        ax.set_xlabel("sigma / E*")
+        ax.set_title(f"p / E* = {p / float(base['E_star']):.3g}")
+    axes[0][0].set_ylabel("P(sigma) E*")
+    axes[0][-1].legend()
+    fig.suptitle(f"Stress distribution, zeta = {zeta:g} (seed Fig. 4)")
+    fig.tight_layout()
+    return fig
+
+
+register(
+    Stage(
+        name="contact",
+        version="1",
+        compute=compute_contact,
+        requires=("psd",),
+        params=("material.E", "material.nu", "load.p", "contact.zeta", "numerics.sigma_points", "numerics.sigma_max"),
+        outputs={
+            "G": Var("Pa^2", "Persson's G(zeta) (eq 17)"),
+            "contact_area_ratio": Var("1", "relative contact area A/A0 (eq 19)"),
+            "E_star": Var("Pa", "effective modulus E*"),
+            "stress_distribution": Var("1/Pa", "stress distribution P(sigma; p, zeta) (eq 16)", optional=True),
+        },
+        coords={
+            "zeta": Var("1", "magnification"),
+            "p": Var("Pa", "nominal pressure"),
+            "sigma": Var("Pa", "local normal stress"),
+        },
+        figures=(
+            Figure("fig3_contact_area", "A/A0 against p/E* (seed Fig. 3)", ("contact",), figure_contact_area),
+            Figure("fig4_stress_distribution", "P(sigma) (seed Fig. 4)", ("contact",), figure_stress_distribution),
+        ),
+        doc="G(zeta), A/A0(p, zeta, eta) and optionally P(sigma; p, zeta, eta).",
+    )
+)
