@@ -51,6 +51,8 @@ def main(argv: list[str] | None = None) -> int:
     except ComputationError as exc:
         print(f"roughcontact: computation failed: {exc}", file=sys.stderr)
         return 1
+    except BrokenPipeError:  # output piped into head & co.
+        return 0
     except KeyboardInterrupt:
         print("roughcontact: interrupted; nothing half-written is kept", file=sys.stderr)
         return 1
@@ -71,6 +73,13 @@ def _dispatch(args) -> int:
     if args.command == "show":
         return _show(args.file)
     sc = scenes.load(args.scene)
+    try:
+        return _scene_command(args, sc)
+    except UserError as exc:  # errors about a scene key name the scene file too
+        raise (exc.located(file=str(sc.path)) if exc.key and sc.path else exc) from None
+
+
+def _scene_command(args, sc) -> int:
     outdir = args.outdir or engine.default_outdir(sc)
     if args.command == "plan":
         plans = engine.plan(sc, outdir)
@@ -137,12 +146,33 @@ def _show(path: Path) -> int:
         for label, attr in (("parameters", "parameters"), ("upstream", "upstream_keys"), ("input files", "input_files")):
             if attr in a:
                 try:
-                    text = json.dumps(json.loads(a[attr]), indent=2)
+                    value = json.loads(a[attr])
                 except ValueError:
-                    text = a[attr]
-                print(f"{label}: {text}")
+                    print(f"{label}: {a[attr]}")
+                    continue
+                print(f"{label}:")
+                for line in _summarise(value):
+                    print(f"  {line}")
         print(f"history: {a.get('history', '')}")
     return 0
+
+
+def _summarise(value, prefix="") -> list[str]:
+    """Readable lines for a provenance JSON value; long lists are shortened to their ends."""
+    if isinstance(value, dict):
+        out = []
+        for k, v in value.items():
+            out += _summarise(v, f"{prefix}{k}.") if isinstance(v, dict) else [f"{prefix}{k} = {_brief(v)}"]
+        return out
+    if isinstance(value, list) and value and isinstance(value[0], dict):
+        return [", ".join(f"{k}={v}" for k, v in item.items()) for item in value]
+    return [f"{prefix.rstrip('.')} = {_brief(value)}" if prefix else _brief(value)]
+
+
+def _brief(v) -> str:
+    if isinstance(v, list) and len(v) > 6:
+        return f"[{v[0]!r}, {v[1]!r}, ..., {v[-1]!r}] ({len(v)} values)"
+    return json.dumps(v)
 
 
 if __name__ == "__main__":

@@ -233,6 +233,8 @@ def figure_contact_area(results, zeta=4.0):
 
 
 def figure_stress_distribution(results, zeta=4.0):
+    """Seed Fig. 4: P(sigma) at three pressures (where the reference curve's A/A0 is about
+    0.1, 0.3 and 0.6), one curve per case; a delta (no roughness) is drawn as a vertical line."""
     import matplotlib.pyplot as plt
 
     cases = _cases(results)
@@ -240,19 +242,27 @@ def figure_stress_distribution(results, zeta=4.0):
     if "stress_distribution" not in base:
         raise UserError("the scene does not ask for 'stress_distribution' (add it to outputs.variables)",
                         key="outputs.variables")
-    p_all = base["p"].values
-    picks = p_all[np.unique(np.linspace(0, p_all.size - 1, 3).round().astype(int))] if p_all.ndim else [float(p_all)]
+    E_star = float(base["E_star"])
+    ref = _at_zeta(cases[0][1], zeta)["contact_area_ratio"]
+    ref = ref.isel({d: 0 for d in ref.dims if d != "p"})
+    picks = sorted({float(ref["p"][int(np.argmin(np.abs(ref.values - a)))]) for a in (0.1, 0.3, 0.6)})
     fig, axes = plt.subplots(1, len(picks), figsize=(4.2 * len(picks), 3.8), squeeze=False)
     for ax, p in zip(axes[0], picks):
+        right = 0.0
         for (label, ds), style in zip(cases, ("-", "--", ":", "-.", "-", "--")):
             ds = _at_zeta(ds, zeta)
-            d = ds["stress_distribution"].sel(p=p, method="nearest") if "p" in ds["stress_distribution"].dims else ds["stress_distribution"]
-            E_star = float(ds["E_star"])
-            ax.plot(d["sigma"].values / E_star, d.values * E_star, style, label=label)
+            d = ds["stress_distribution"].sel(p=p, method="nearest")
+            G = float(ds["G"])
+            if G > 0:
+                line, = ax.plot(d["sigma"].values / E_star, d.values * E_star, style, label=label)
+                right = max(right, (p + 5.0 * np.sqrt(G)) / E_star)
+            else:
+                ax.axvline(p / E_star, linestyle=style, color="0.3", label=f"{label} (full contact: delta)")
+        ax.set_xlim(0, right or 2 * p / E_star)
         ax.set_xlabel("sigma / E*")
-        ax.set_title(f"p / E* = {p / float(base['E_star']):.3g}")
+        ax.set_title(f"p / E* = {p / E_star:.3g}")
     axes[0][0].set_ylabel("P(sigma) E*")
-    axes[0][-1].legend()
+    axes[0][-1].legend(fontsize=8)
     fig.suptitle(f"Stress distribution, zeta = {zeta:g} (seed Fig. 4)")
     fig.tight_layout()
     return fig
