@@ -30,6 +30,8 @@ def _parser() -> argparse.ArgumentParser:
     run = scene_command("run", "compute what the scene asks for, reusing up-to-date results")
     run.add_argument("--force", action="append", default=[], metavar="STAGE", help="recompute STAGE even if fresh ('all': every stage)")
     run.add_argument("--quiet", action="store_true", help="no progress messages")
+    run.add_argument("--scheduler", help="threads (default), processes, synchronous, or a dask.distributed "
+                                         "scheduler address tcp://host:port (overrides [run] scheduler)")
     scene_command("plan", "say for each stage whether it is fresh, stale (and why) or missing; exit 1 if anything would run")
     plot = scene_command("plot", "draw the figures of the scene's stages as PNG (computing what is missing)")
     plot.add_argument("--quiet", action="store_true")
@@ -89,7 +91,7 @@ def _scene_command(args, sc) -> int:
         return 1 if any(p.status != "fresh" for p in plans) else 0
     reporter = engine.Reporter(None if getattr(args, "quiet", False) else sys.stderr)
     if args.command == "run":
-        engine.run(sc, outdir, force=args.force, report=reporter)
+        engine.run(sc, outdir, force=args.force, report=reporter, scheduler=args.scheduler)
         print(f"results in {outdir}")
         return 0
     if args.command == "plot":

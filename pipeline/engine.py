@@ -209,18 +209,28 @@ class Reporter:
         if self.stream is not None:
             print(message, file=self.stream, flush=True)
 
-    def dask_progress(self):
-        if self.stream is None:
-            return None
-        from dask.diagnostics import ProgressBar
 
-        return ProgressBar(minimum=1.0, out=self.stream)
+
+#: results larger than this many bytes are handed downstream lazily (dask-backed), not loaded
+LOAD_LIMIT_BYTES = 256 * 2**20
 
 
 def run(scene: Scene, outdir: Path, targets: Iterable[str] | None = None, force: Iterable[str] = (),
-        report: Reporter | None = None) -> dict[str, dict[str, xr.Dataset]]:
-    """Bring every needed stage up to date; return ``results[variant][stage]`` (in memory)."""
+        report: Reporter | None = None, scheduler: str | None = None) -> dict[str, dict[str, xr.Dataset]]:
+    """Bring every needed stage up to date; return ``results[variant][stage]``.
+
+    ``scheduler`` overrides the scene's ``[run] scheduler`` ('threads', 'processes',
+    'synchronous' or a dask.distributed address). Small results are returned in memory, large
+    ones lazily.
+    """
+    from .compute import scheduler as open_scheduler
+
     report = report or Reporter()
+    with open_scheduler(scheduler or scene.get("run.scheduler")) as compute_with:
+        return _run(scene, outdir, targets, force, report, compute_with)
+
+
+def _run(scene, outdir, targets, force, report, compute_with):
     plans = plan(scene, outdir, targets, force)
     scenes = {"base": scene, **scene.variants}
     store.clean_temporaries(outdir)
@@ -232,28 +242,44 @@ def run(scene: Scene, outdir: Path, targets: Iterable[str] | None = None, force:
         tag = f"[{i}/{n}] {p.label}"
         if p.status == "fresh":
             report(f"{tag}: up to date ({p.path})")
-            results[p.variant][p.stage.name] = store.open_result(p.path)
+            results[p.variant][p.stage.name] = _open(p.path)
             continue
         report(f"{tag}: computing ({'; '.join(p.reasons)})")
         t0 = time.perf_counter()
         files = {param: READERS[_reader(p.stage, param)](path) for param, path in p.file_paths.items()}
+        upstream = {up: results[p.variant][up] for up in p.record["upstream"]}
         inp = StageInput(
             params=p.params,
-            upstream={up: results[p.variant][up] for up in p.record["upstream"]},
+            upstream=upstream,
             files=files,
             wanted=p.wanted,
-            chunks=scenes[p.variant].chunks,
+            chunks=stage_chunks(scenes[p.variant], p.stage, p.params, p.wanted, upstream),
         )
         ds = _finish(p.stage.compute(inp), p)
-        store.write(ds, p.path, progress=report.dask_progress() if _has_dask(ds) else None)
-        results[p.variant][p.stage.name] = store.open_result(p.path)
+        store.write(ds, p.path, compute_with=compute_with, progress_stream=report.stream)
+        results[p.variant][p.stage.name] = _open(p.path)
         report(f"{tag}: done in {time.perf_counter() - t0:.2f} s -> {p.path}")
     return results
+
+
+def stage_chunks(scene: Scene, st: Stage, params, wanted=frozenset(), upstream=None) -> dict[str, int]:
+    """Chunk sizes for the stage's sweep dimensions: the scene's explicit ones, the others chosen
+    so that a chunk's working memory (the stage's bytes per sweep point) stays near chunk_mb."""
+    from .compute import auto_chunks
+
+    per_point = st.point_bytes(params, wanted, upstream or {}) if st.point_bytes else 512
+    budget = scene.chunk_mb * 2**20 / max(per_point, 8)
+    return auto_chunks(scene.sweep_sizes(), budget, scene.chunks)
+
+
+def _open(path: Path) -> xr.Dataset:
+    """A stored result: in memory if small, else opened lazily with the file's own chunking."""
+    if path.stat().st_size <= LOAD_LIMIT_BYTES:
+        return store.open_result(path)
+    return xr.open_dataset(path, chunks={})
 
 
 def _reader(st: Stage, param: str) -> str:
     return next(f.reader for f in st.files if f.param == param)
 
 
-def _has_dask(ds: xr.Dataset) -> bool:
-    return any(v.chunks is not None for v in ds.variables.values())

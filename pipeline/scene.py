@@ -34,7 +34,19 @@ register_section(
     )
 )
 
+register_section(
+    Section(
+        "run",
+        (Param("scheduler", "str", default="threads",
+               doc="where dask computes: 'threads', 'processes', 'synchronous', or the address of a "
+                   "dask.distributed scheduler (tcp://host:port); never part of a result's key"),),
+        doc="how the engine runs (does not change results)",
+    )
+)
+
 TOP_LEVEL = {"name": "str", "description": "str"}
+#: keys of [numerics] that belong to the engine (chunking), not to any stage
+ENGINE_NUMERICS = ("chunks", "chunk_mb")
 
 
 @dataclass
@@ -46,8 +58,16 @@ class Scene:
     path: Path | None = None
     description: str = ""
     chunks: dict[str, int] = field(default_factory=dict)
+    chunk_mb: float = 32.0
     variants: dict[str, "Scene"] = field(default_factory=dict)
     variant: str = "base"
+
+    def sweep_sizes(self) -> dict[str, int]:
+        """Sizes of the sweep dimensions this scene defines (e.g. {"p": 101, "eta": 3})."""
+        out: dict[str, int] = {}
+        for name, section in sections().items():
+            out.update(section.sweep_dims(self.values.get(name)))
+        return out
 
     @property
     def outputs(self) -> tuple[str, ...]:
@@ -126,6 +146,9 @@ def _from_dict(raw: dict, path: Path | None, variant: str) -> Scene:
             raise UserError(f"unknown key {key!r}{did_you_mean(key, list(schema) + list(TOP_LEVEL) + ['variants'])}", key=key)
     numerics = raw.get("numerics") if isinstance(raw.get("numerics"), dict) else None
     chunks = _chunks(numerics.pop("chunks", {}) if numerics is not None else {})
+    chunk_mb = numerics.pop("chunk_mb", 32.0) if numerics is not None else 32.0
+    if isinstance(chunk_mb, bool) or not isinstance(chunk_mb, (int, float)) or not 0.01 <= chunk_mb <= 65536:
+        raise UserError(f"must be a number of MB between 0.01 and 65536, got {chunk_mb!r}", key="numerics.chunk_mb")
     base_dir = path.parent if path else None
     values = {name: section.convert(raw.get(name), base_dir) for name, section in schema.items()}
     scene = Scene(
@@ -134,6 +157,7 @@ def _from_dict(raw: dict, path: Path | None, variant: str) -> Scene:
         values=values,
         path=path,
         chunks=chunks,
+        chunk_mb=float(chunk_mb),
         variant=variant,
     )
     if not isinstance(variants_raw, dict):
@@ -141,6 +165,7 @@ def _from_dict(raw: dict, path: Path | None, variant: str) -> Scene:
     base_raw = copy.deepcopy(raw)
     if numerics is not None:
         base_raw["numerics"]["chunks"] = dict(chunks)
+        base_raw["numerics"]["chunk_mb"] = chunk_mb
     for name, override in variants_raw.items():
         if not isinstance(override, dict):
             raise UserError("expected a table of overrides", key=f"variants.{name}")
@@ -186,7 +211,9 @@ def reference() -> str:
         "a *sweep* is one quantity, a list of them (a sweep dimension), `{ values = [1, 2], unit = \"MPa\" }`,",
         "or a range `{ from = \"1 MPa\", to = \"1 GPa\", num = 50, spacing = \"log\" }`.",
         "Top-level keys: `name` (names the output folder), `description`. `[numerics] chunks = { p = 1000 }`",
-        "sets dask chunk sizes per sweep dimension. `[variants.NAME]` tables override any key and are",
+        "sets dask chunk sizes per sweep dimension; otherwise sweeps are chunked automatically so that a",
+        "chunk's working memory stays near `[numerics] chunk_mb` (default 32). Chunking never changes results",
+        "and is not part of a result's key. `[variants.NAME]` tables override any key and are",
         "computed alongside (e.g. `[variants.substrate_only] solid = { kind = \"smooth\" }`).",
         "",
     ]

@@ -48,6 +48,8 @@ class Param:
         Allowed strings for ``choice``; also extra allowed strings for a sweep (e.g. ``"all"``).
     doc
         One-line description, shown in the scene reference.
+    dim
+        Sweep dimension name (see the attribute's comment).
     """
 
     name: str
@@ -60,6 +62,9 @@ class Param:
     hi_open: bool = False
     choices: tuple = ()
     doc: str = ""
+    #: name of the dimension a list-valued sweep becomes (``{section}`` is replaced by the
+    #: section's name, e.g. ``hrms_{section}``); default: the key's name
+    dim: str | None = None
 
     def __post_init__(self):
         if self.kind not in KINDS:
@@ -187,6 +192,17 @@ class Section:
     discriminator: str | None = None
     variants: Mapping[str, tuple[Param, ...]] = field(default_factory=dict)
     check: Callable[[dict, str], None] | None = None
+
+    def sweep_dims(self, values: dict | None) -> dict[str, int]:
+        """Sizes of the sweep dimensions that ``values`` (this section, converted) define."""
+        if not values:
+            return {}
+        out = {}
+        for p in self.params_for(values.get(self.discriminator) if self.discriminator else None):
+            v = values.get(p.name)
+            if p.kind == "sweep" and isinstance(v, np.ndarray) and v.ndim == 1:
+                out[(p.dim or p.name).format(section=self.name)] = v.size
+        return out
 
     def params_for(self, kind: str | None) -> tuple[Param, ...]:
         return self.params + tuple(self.variants.get(kind, ())) if kind is not None else self.params

@@ -80,6 +80,12 @@ class Stage:
     #: particular scene, when it is a subset of ``requires`` (e.g. a stage that only needs a
     #: measured input when the scene uses one).
     needed: Callable[[Mapping[str, Any]], tuple[str, ...]] | None = None
+    #: optional ``point_bytes(params, wanted, upstream) -> int``: working memory, per point of
+    #: the scene's sweep dimensions, of the stage's largest intermediate (e.g. 8 * q nodes *
+    #: angle nodes, times the size of any dimension the stage adds itself), given its
+    #: parameters, the optional outputs asked for and the upstream results (lazy or small);
+    #: the engine sizes chunks with it (default 512)
+    point_bytes: Callable[[Mapping[str, Any], frozenset, Mapping[str, xr.Dataset]], int] | None = None
 
 
 @dataclass
@@ -118,7 +124,7 @@ class StageInput:
             return xr.DataArray(values, name=dim, attrs=attrs)
         da = xr.DataArray(values, dims=(dim,), coords={dim: (dim, values, attrs)}, name=dim, attrs=attrs)
         size = int(self.chunks.get(dim, 0) or 0)
-        if size and size < values.size:
+        if 0 < size < values.size:
             da = da.chunk({dim: size})
         return da
 

@@ -117,27 +117,53 @@ def _encodable(ds: xr.Dataset) -> xr.Dataset:
     return ds
 
 
-def write(ds: xr.Dataset, path: Path, progress=None) -> None:
+def write(ds: xr.Dataset, path: Path, compute_with="threads", progress_stream=None) -> None:
     """Write ``ds`` to ``path`` atomically: a temporary file in the same folder, then a rename.
 
-    A crash or kill while writing leaves at most a ``.tmp-*`` file, which is never read as a
-    result (and is removed by :func:`clean_temporaries`).
+    Dask-backed variables are computed block by block by ``compute_with`` (a dask scheduler
+    name or a distributed Client) and written from this process (:func:`pipeline.compute.write_blocks`),
+    so a result never has to fit in memory. A crash or kill while writing leaves at most a
+    ``.tmp-*`` file, which is never read as a result (and is removed by :func:`clean_temporaries`).
     """
+    from .compute import dask_variables, write_blocks
+
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f"{TMP_PREFIX}{path.name}.", dir=path.parent)
     os.close(fd)
     try:
-        delayed = _encodable(ds).to_netcdf(tmp, engine="netcdf4", compute=progress is None)
-        if progress is not None:
-            with progress:
-                delayed.compute()
+        ds = _encodable(ds)
+        lazy = dask_variables(ds)
+        ds.drop_vars(lazy).to_netcdf(tmp, engine="netcdf4")
+        if lazy:
+            _define(tmp, ds, lazy)
+            write_blocks(tmp, ds, lazy, compute_with, progress_stream)
         with open(tmp, "rb+") as fh:
             os.fsync(fh.fileno())
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
+
+
+def _define(path, ds: xr.Dataset, names: list[str]) -> None:
+    """Declare the lazily computed variables in the file, with their attributes."""
+    import netCDF4
+
+    with netCDF4.Dataset(path, "a") as nc:
+        for name in names:
+            var = ds[name].variable
+            for dim in var.dims:
+                if dim not in nc.dimensions:
+                    nc.createDimension(dim, ds.sizes[dim])
+            fill = np.nan if np.issubdtype(var.dtype, np.floating) else None
+            target = nc.createVariable(name, var.dtype, var.dims, fill_value=fill)
+            target.setncatts(dict(var.attrs))
+        coords = [n for n in names if n in ds.coords and n not in ds.dims]
+        for name in ds.data_vars:
+            extra = [c for c in coords if set(ds[c].dims) <= set(ds[name].dims)]
+            if extra and name in nc.variables:
+                nc.variables[name].setncattr("coordinates", " ".join(extra))
 
 
 def clean_temporaries(folder: Path) -> None:

@@ -84,9 +84,9 @@ def stress_distribution(sigma, p, G):
 
     Parameters
     ----------
-    sigma : array (k,)
-        Stress grid (Pa), uniform.
-    p, G : arrays (broadcast together)
+    sigma : array (k,) or (..., k)
+        Stress grid (Pa), uniform along the last axis; leading axes broadcast with p and G.
+    p, G : arrays
         Nominal pressure (Pa) and Persson's G (Pa^2).
 
     Returns
@@ -102,10 +102,37 @@ def stress_distribution(sigma, p, G):
         smooth = np.where(sigma >= 0, smooth / np.sqrt(4.0 * np.pi * Gs), 0.0)
     if np.all(G > 0):
         return smooth
-    step = sigma[1] - sigma[0] if sigma.size > 1 else 1.0
-    nearest = np.abs(sigma - p) == np.min(np.abs(sigma - p), axis=-1, keepdims=True)
-    spike = np.where(nearest, 1.0 / step, 0.0)
+    step = sigma[..., 1:2] - sigma[..., 0:1] if sigma.shape[-1] > 1 else np.ones_like(sigma[..., :1])
+    distance = np.abs(sigma - p)
+    nearest = distance == np.min(distance, axis=-1, keepdims=True)
+    first = np.cumsum(nearest, axis=-1) == 1  # one node only, if two are equally near
+    with np.errstate(divide="ignore"):
+        spike = np.where(nearest & first, 1.0 / step, 0.0)
     return np.where(G > 0, smooth, spike)
+
+
+def stress_distribution_adaptive(level, p, G, width):
+    """P(sigma) on a grid adapted to each (p, G): sigma = level * (p + width sqrt(G)).
+
+    Parameters
+    ----------
+    level : array (k,)
+        Uniform nodes in [0, 1].
+    p, G : arrays (broadcast together)
+        Nominal pressure (Pa) and Persson's G (Pa^2).
+    width : float
+        How many sqrt(G) beyond p the grid reaches (the tail beyond has mass below
+        erfc(width / 2)). With G = 0 the grid reaches 2 p.
+
+    Returns
+    -------
+    (P, sigma) : arrays (..., k)
+        The distribution (1/Pa, eq 16) and the stress at each node (Pa).
+    """
+    p, G = np.broadcast_arrays(np.asarray(p, dtype=float), np.asarray(G, dtype=float))
+    top = np.where(G > 0, p + width * np.sqrt(np.maximum(G, 0.0)), 2.0 * p)
+    sigma = np.asarray(level, dtype=float) * top[..., None]
+    return stress_distribution(sigma, p, G), sigma
 
 
 # ----------------------------------------------------------------------------------------
@@ -142,8 +169,8 @@ register_section(
 register_params(
     "numerics",
     Param("sigma_points", "int", default=401, lo=3, doc="nodes of the stress grid of P(sigma)"),
-    Param("sigma_max", "quantity", "Pa", default=None, lo=0.0, lo_open=True,
-          doc="upper end of the stress grid (default: max p + 8 sqrt(max G))"),
+    Param("sigma_width", "quantity", "", default=8.0, lo=1.0,
+          doc="the stress grid of each (p, zeta, eta) reaches p + sigma_width sqrt(G)"),
 )
 
 # ----------------------------------------------------------------------------------------
@@ -180,16 +207,17 @@ def compute_contact(inp: StageInput) -> xr.Dataset:
     ds = xr.Dataset({"G": G, "contact_area_ratio": area})
     ds["E_star"] = xr.DataArray(E_star, attrs={"units": "Pa", "long_name": "effective modulus E* = E/(1 - nu^2)"})
     if "stress_distribution" in inp.wanted:
-        p_max = float(np.max(inp["load.p"]))
-        sigma_max = inp["numerics.sigma_max"] or p_max + 8.0 * float(np.sqrt(G.max()))
-        sigma = xr.DataArray(np.linspace(0.0, sigma_max, inp["numerics.sigma_points"]), dims=("sigma",),
-                             attrs={"units": "Pa", "long_name": "local normal stress"})
-        dist = xr.apply_ufunc(
-            stress_distribution, sigma, p, G, input_core_dims=[["sigma"], [], []], output_core_dims=[["sigma"]],
-            dask="parallelized", output_dtypes=[float],
-        ).assign_coords(sigma=sigma)
+        level = xr.DataArray(np.linspace(0.0, 1.0, inp["numerics.sigma_points"]), dims=("stress_level",),
+                             attrs={"units": "1", "long_name": "node of the stress grid, sigma / (p + sigma_width sqrt(G))"})
+        dist, sigma = xr.apply_ufunc(
+            stress_distribution_adaptive, level, p, G, inp["numerics.sigma_width"],
+            input_core_dims=[["stress_level"], [], [], []], output_core_dims=[["stress_level"], ["stress_level"]],
+            dask="parallelized", output_dtypes=[float, float],
+        )
+        sigma.attrs = {"units": "Pa", "long_name": "local normal stress sigma at each node of the stress grid"}
         dist.attrs = {"units": "1/Pa", "long_name": "stress distribution P(sigma; p, zeta) (eq 16)"}
         ds["stress_distribution"] = dist
+        ds = ds.assign_coords(stress_level=level, sigma=sigma)
     return ds
 
 
@@ -253,6 +281,8 @@ def figure_stress_distribution(results, zeta=4.0):
             ds = _at_zeta(ds, zeta)
             d = ds["stress_distribution"].sel(p=p, method="nearest")
             G = float(ds["G"])
+            if "p" in d["sigma"].dims:
+                d = d.assign_coords(sigma=d["sigma"])
             if G > 0:
                 line, = ax.plot(d["sigma"].values / E_star, d.values * E_star, style, label=label)
                 right = max(right, (p + 5.0 * np.sqrt(G)) / E_star)
@@ -268,13 +298,22 @@ def figure_stress_distribution(results, zeta=4.0):
     return fig
 
 
+def _point_bytes(params, wanted, upstream) -> int:
+    """Working memory per sweep point: a few float64 temporaries, times the stress grid when
+    P(sigma) is asked for, times the q grid when zeta = "all" adds a dimension of that size."""
+    per = 8 * 4 * (params["numerics.sigma_points"] if "stress_distribution" in wanted else 2)
+    if isinstance(params["contact.zeta"], str) and "psd" in upstream:
+        per *= upstream["psd"].sizes["q"]
+    return per
+
+
 register(
     Stage(
         name="contact",
         version="1",
         compute=compute_contact,
         requires=("psd",),
-        params=("material.E", "material.nu", "load.p", "contact.zeta", "numerics.sigma_points", "numerics.sigma_max"),
+        params=("material.E", "material.nu", "load.p", "contact.zeta", "numerics.sigma_points", "numerics.sigma_width"),
         outputs={
             "G": Var("Pa^2", "Persson's G(zeta) (eq 17)"),
             "contact_area_ratio": Var("1", "relative contact area A/A0 (eq 19)"),
@@ -284,12 +323,14 @@ register(
         coords={
             "zeta": Var("1", "magnification"),
             "p": Var("Pa", "nominal pressure"),
-            "sigma": Var("Pa", "local normal stress"),
+            "sigma": Var("Pa", "local normal stress at each node of the stress grid"),
+            "stress_level": Var("1", "node of the stress grid, sigma / (p + sigma_width sqrt(G))"),
         },
         figures=(
             Figure("fig3_contact_area", "A/A0 against p/E* (seed Fig. 3)", ("contact",), figure_contact_area),
             Figure("fig4_stress_distribution", "P(sigma) (seed Fig. 4)", ("contact",), figure_stress_distribution),
         ),
         doc="G(zeta), A/A0(p, zeta, eta) and optionally P(sigma; p, zeta, eta).",
+        point_bytes=_point_bytes,
     )
 )

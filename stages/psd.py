@@ -174,7 +174,8 @@ _SELF_AFFINE = (
     Param("qL", "quantity", "1/m", lo=0.0, lo_open=True, doc="lowest wavenumber 2 pi / L"),
     Param("q0", "quantity", "1/m", default=None, lo=0.0, lo_open=True, doc="roll-off wavenumber (default qL: no roll-off)"),
     Param("q1", "quantity", "1/m", lo=0.0, lo_open=True, doc="upper cut-off wavenumber"),
-    Param("hrms", "sweep", "m", default=None, lo=0.0, lo_open=True, doc="rms roughness; a list is a sweep"),
+    Param("hrms", "sweep", "m", default=None, lo=0.0, lo_open=True, dim="hrms_{section}",
+          doc="rms roughness; a list is a sweep (dimension hrms_substrate / hrms_solid)"),
     Param("C0", "quantity", "m^4", default=None, lo=0.0, lo_open=True, doc="PSD plateau C(q0) (instead of hrms)"),
 )
 _PSD_FILE = (

@@ -1,0 +1,137 @@
+"""Chunking, scheduling and the block writer.
+
+* :func:`auto_chunks` picks dask chunk sizes for a scene's sweep dimensions so that one chunk's
+  working memory stays near a budget (explicit sizes from the scene win).
+* :func:`scheduler` turns the scene's / command line's scheduler setting into something dask
+  can compute with: 'threads', 'processes', 'synchronous' or a dask.distributed client.
+* :func:`write_blocks` fills the dask-backed variables of a NetCDF file block by block: the
+  blocks are computed by the scheduler (on a cluster's workers, say) and written by *this*
+  process only, a bounded number in flight, so a sweep never has to fit in memory and no worker
+  ever writes to the file.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import itertools
+import math
+import sys
+import time
+from typing import Iterator, Mapping
+
+import dask
+import netCDF4
+import numpy as np
+import xarray as xr
+
+from .errors import UserError
+
+
+def auto_chunks(sizes: Mapping[str, int], budget_points: int, explicit: Mapping[str, int] | None = None) -> dict[str, int]:
+    """Chunk sizes per sweep dimension: explicit ones as given; the others start whole and the
+    largest is halved until the product of chunk sizes is within ``budget_points``."""
+    explicit = dict(explicit or {})
+    chunks = {d: (explicit[d] if explicit.get(d) else n) for d, n in sizes.items()}
+    free = [d for d in sizes if not explicit.get(d)]
+    budget_points = max(1, int(budget_points))
+    while free and math.prod(chunks.values()) > budget_points:
+        d = max(free, key=lambda k: chunks[k])
+        if chunks[d] == 1:
+            break
+        chunks[d] = math.ceil(chunks[d] / 2)
+    return {d: c for d, c in chunks.items() if c < sizes[d]}
+
+
+@contextlib.contextmanager
+def scheduler(setting: str) -> Iterator[object]:
+    """Yield what :func:`write_blocks` computes with: a dask scheduler name or a distributed Client."""
+    if setting in ("threads", "processes", "synchronous", "sync"):
+        yield setting
+        return
+    if "://" in setting or setting.count(":") == 1:
+        try:
+            from distributed import Client
+        except ImportError:
+            raise UserError("a scheduler address needs dask.distributed: pip install distributed", key="run.scheduler") from None
+        try:
+            client = Client(setting, timeout="10s", set_as_default=False)
+        except (OSError, TimeoutError) as exc:
+            raise UserError(f"cannot reach the dask scheduler at {setting!r} ({exc})", key="run.scheduler") from None
+        try:
+            yield client
+        finally:
+            client.close()
+        return
+    raise UserError(f"scheduler {setting!r}: use threads, processes, synchronous or a tcp:// address", key="run.scheduler")
+
+
+class Progress:
+    """A one-line text progress bar on a stream (blocks written / total)."""
+
+    def __init__(self, total: int, label: str, stream=sys.stderr, width: int = 30):
+        self.total, self.label, self.stream, self.width = total, label, stream, width
+        self.done = 0
+        self.t0 = time.perf_counter()
+        self._last = 0.0
+
+    def advance(self, n: int = 1) -> None:
+        self.done += n
+        now = time.perf_counter()
+        if self.stream is None or (now - self._last < 0.2 and self.done < self.total):
+            return
+        self._last = now
+        filled = int(self.width * self.done / max(self.total, 1))
+        self.stream.write(f"\r    {self.label} [{'#' * filled}{'.' * (self.width - filled)}] "
+                          f"{self.done}/{self.total} blocks {now - self.t0:6.1f} s")
+        if self.done >= self.total:
+            self.stream.write("\n")
+        self.stream.flush()
+
+
+def dask_variables(ds: xr.Dataset) -> list[str]:
+    return [name for name, v in ds.variables.items() if v.chunks is not None]
+
+
+def write_blocks(path, ds: xr.Dataset, names: list[str], compute_with, progress_stream=sys.stderr,
+                 in_flight: int | None = None) -> None:
+    """Compute the dask variables ``names`` of ``ds`` block by block and write them into the
+    existing NetCDF file ``path`` (whose other variables are already written).
+
+    Variables with the same dimensions and chunks are computed together, so that work they share
+    (an integral over q, say) is done once per block.
+    """
+    groups: dict[tuple, list[str]] = {}
+    for name in names:
+        var = ds[name].variable
+        groups.setdefault((var.dims, var.chunks), []).append(name)
+    total = sum(math.prod(len(c) for c in chunks) for (_, chunks) in groups)
+    bar = Progress(total, "writing", progress_stream)
+    client = compute_with if not isinstance(compute_with, str) else None
+    if in_flight is None:
+        workers = len(client.scheduler_info()["workers"]) if client is not None else (dask.system.CPU_COUNT or 2)
+        in_flight = max(2, 2 * workers)
+    with netCDF4.Dataset(path, "a") as nc:
+        for (dims, chunks), group in groups.items():
+            offsets = [np.concatenate([[0], np.cumsum(c)]) for c in chunks]
+            targets = [nc.variables[name] for name in group]
+            arrays = [ds[name].data for name in group]
+            indices = itertools.product(*(range(len(c)) for c in chunks))
+
+            def region(idx):
+                return tuple(slice(int(o[i]), int(o[i + 1])) for o, i in zip(offsets, idx))
+
+            while True:
+                batch = list(itertools.islice(indices, in_flight))
+                if not batch:
+                    break
+                tasks = [[a.blocks[idx] for a in arrays] for idx in batch]
+                if client is not None:
+                    futures = client.compute(tasks)
+                    results = client.gather(futures)
+                else:
+                    results = dask.compute(*tasks, scheduler=compute_with)
+                for idx, values in zip(batch, results):
+                    sl = region(idx)
+                    for target, value in zip(targets, values):
+                        target[sl] = np.asarray(value)
+                    bar.advance()
