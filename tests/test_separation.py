@@ -14,7 +14,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.integrate import quad
-from scipy.special import erf, exp1
+from scipy.special import erf
 
 from pipeline import cli
 from pipeline.scene import from_dict
