@@ -138,3 +138,103 @@ def log_grid(lo: float, hi: float, points_per_decade: int, knots=()) -> np.ndarr
         pieces.append(np.geomspace(a, b, n + 1)[:-1])
     pieces.append([hi])
     return np.concatenate(pieces)
+
+
+def gauss_legendre_panels(edges, order: int):
+    """Gauss-Legendre nodes and weights on consecutive panels [edges_k, edges_{k+1}].
+
+    Parameters
+    ----------
+    edges : array (..., n + 1)
+        Panel ends, non-decreasing along the last axis (zero-width panels get zero weights).
+    order : int
+        Nodes per panel; exact for polynomials of degree ``2 order - 1`` on each panel.
+
+    Returns
+    -------
+    nodes, weights : arrays (..., n * order)
+        Panel by panel, in increasing order; ``(weights * f(nodes)).sum(-1)`` is the integral
+        of ``f`` from ``edges[..., 0]`` to ``edges[..., -1]``.
+    """
+    edges = np.asarray(edges, dtype=float)
+    t, w = np.polynomial.legendre.leggauss(int(order))
+    a, b = edges[..., :-1, None], edges[..., 1:, None]
+    half = 0.5 * (b - a)
+    nodes = 0.5 * (a + b) + half * t
+    weights = half * w
+    shape = edges.shape[:-1] + (-1,)
+    return nodes.reshape(shape), np.broadcast_to(weights, nodes.shape).reshape(shape)
+
+
+def inverse_cumulative_integral(x, y, level):
+    """The abscissa at which the running integral of ``y`` from ``x[0]`` reaches ``level``.
+
+    The inverse of :func:`cumulative_integral` / :func:`integral_to` under the same model: on
+    each segment the integrand is the power law through its end values (or the straight line
+    where an end is zero), and that model's running integral is inverted in closed form
+    (``x_i (1 + (k + 1) dI / (y_i x_i))^(1/(k + 1))`` for a power law of exponent k, the root
+    of a quadratic for a straight line). Where ``y`` vanishes on a stretch the running
+    integral is flat and the *end* of the stretch is returned.
+
+    Parameters
+    ----------
+    x : array (n,)
+        Strictly increasing positive abscissae.
+    y : array (..., n)
+        Integrand values, ``y >= 0`` (the running integral must be non-decreasing).
+    level : array (..., m)
+        Target values of the running integral, within [0, total] (clipped to it).
+
+    Returns
+    -------
+    array (..., m)
+        Abscissae in [x[0], x[-1]].
+    """
+    x = np.asarray(x, dtype=float)
+    y = np.asarray(y, dtype=float)
+    cum = cumulative_integral(x, y)
+    lead = np.broadcast_shapes(cum.shape[:-1], np.shape(level)[:-1])
+    cum = np.broadcast_to(cum, lead + cum.shape[-1:])
+    y = np.broadcast_to(y, cum.shape)
+    level = np.broadcast_to(np.asarray(level, dtype=float), lead + np.shape(level)[-1:])
+    level = np.clip(level, 0.0, cum[..., -1:])
+    found = _searchsorted_rows(cum, level)
+    i = np.clip(found, 0, x.size - 2)
+    xa, xb = x[i], x[i + 1]
+    ya, yb = np.take_along_axis(y, i, -1), np.take_along_axis(y, i + 1, -1)
+    dI = np.maximum(level - np.take_along_axis(cum, i, -1), 0.0)
+    positive = (ya > 0) & (yb > 0)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        # power law y = ya (x/xa)^k: dI = ya xa ((x/xa)^(k+1) - 1)/(k+1)
+        k1 = np.log(np.where(positive, yb, 1.0) / np.where(positive, ya, 1.0)) / np.log(xb / xa) + 1.0
+        r = dI / np.where(positive, ya * xa, 1.0)
+        t = k1 * r
+        logratio = np.where(np.abs(t) < 1e-8, r * (1.0 - 0.5 * t), np.log1p(np.maximum(t, -1.0 + 1e-300)) / np.where(k1 == 0, 1.0, k1))
+        x_power = xa * np.exp(logratio)
+        # straight line y = ya + m (x - xa): dI = ya d + m d^2 / 2
+        m = (yb - ya) / (xb - xa)
+        den = ya + np.sqrt(np.maximum(ya * ya + 2.0 * m * dI, 0.0))
+        x_line = xa + np.where(den > 0, 2.0 * dI / np.where(den > 0, den, 1.0), 0.0)
+    out = np.clip(np.where(positive, x_power, x_line), xa, xb)
+    return np.where(found >= x.size - 1, x[-1], out)
+
+
+def _searchsorted_rows(a, v):
+    """Row-wise ``searchsorted(a_row, v_row, side='right') - 1`` for non-decreasing rows.
+
+    ``a`` (..., n) and ``v`` (..., m) with the same leading shape. Each row is mapped to its
+    own interval of the real line so that one flat ``searchsorted`` serves every row.
+    """
+    lead = a.shape[:-1]
+    n, m = a.shape[-1], v.shape[-1]
+    a2 = a.reshape(-1, n)
+    v2 = v.reshape(-1, m)
+    lo = a2[:, :1]
+    span = a2[:, -1:] - lo
+    span = np.where(span > 0, span, 1.0)
+    offset = 4.0 * np.arange(a2.shape[0])[:, None]
+    keys = (a2 - lo) / span + offset
+    targets = np.clip((v2 - lo) / span, -0.5, 1.5) + offset
+    idx = np.searchsorted(keys.ravel(), targets.ravel(), side="right").reshape(v2.shape) - 1
+    idx -= n * np.arange(a2.shape[0])[:, None]
+    return idx.reshape(lead + (m,))
