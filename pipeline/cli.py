@@ -35,6 +35,7 @@ def _parser() -> argparse.ArgumentParser:
     scene_command("plan", "say for each stage whether it is fresh, stale (and why) or missing; exit 1 if anything would run")
     plot = scene_command("plot", "draw the figures of the scene's stages as PNG (computing what is missing)")
     plot.add_argument("--quiet", action="store_true")
+    plot.add_argument("--scheduler", help="as for run")
     show = sub.add_parser("show", help="what is in a result file and where it came from")
     show.add_argument("file", type=Path)
     sub.add_parser("scenes", help="list the built-in scenes")
@@ -95,11 +96,11 @@ def _scene_command(args, sc) -> int:
         print(f"results in {outdir}")
         return 0
     if args.command == "plot":
-        return _plot(sc, outdir, reporter)
+        return _plot(sc, outdir, reporter, args.scheduler)
     raise AssertionError(args.command)
 
 
-def _plot(sc, outdir: Path, reporter) -> int:
+def _plot(sc, outdir: Path, reporter, scheduler=None) -> int:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -109,7 +110,7 @@ def _plot(sc, outdir: Path, reporter) -> int:
     figures = [f for st in stages().values() for f in st.figures if set(f.stages) <= needed]
     if not figures:
         raise UserError("none of the scene's stages draws a figure", key="outputs.variables")
-    results = engine.run(sc, outdir, report=reporter)
+    results = engine.run(sc, outdir, report=reporter, scheduler=scheduler)
     folder = outdir / "figures"
     folder.mkdir(parents=True, exist_ok=True)
     for f in figures:

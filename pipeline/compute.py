@@ -58,11 +58,41 @@ def scheduler(setting: str) -> Iterator[object]:
         except (OSError, TimeoutError) as exc:
             raise UserError(f"cannot reach the dask scheduler at {setting!r} ({exc})", key="run.scheduler") from None
         try:
+            _check_workers(client, setting)
             yield client
         finally:
             client.close()
         return
     raise UserError(f"scheduler {setting!r}: use threads, processes, synchronous or a tcp:// address", key="run.scheduler")
+
+
+def _worker_version() -> str:
+    """Run on each worker: the roughcontact version it can import (stages included)."""
+    import importlib
+
+    from pipeline import __version__
+    from pipeline.stage import stages
+
+    stages()
+    importlib.import_module("stages")
+    return __version__
+
+
+def _check_workers(client, address: str) -> None:
+    from . import __version__
+
+    try:
+        versions = client.run(_worker_version)
+    except Exception as exc:  # deserialisation or import failures on the workers
+        raise UserError(
+            f"the workers of {address} cannot import roughcontact ({exc.__class__.__name__}); install the same "
+            f"roughcontact ({__version__}) in the workers' environment", key="run.scheduler") from None
+    if not versions:
+        raise UserError(f"the dask cluster at {address} has no workers", key="run.scheduler")
+    wrong = {w: v for w, v in versions.items() if v != __version__}
+    if wrong:
+        raise UserError(f"workers run roughcontact {sorted(set(wrong.values()))}, this client {__version__}",
+                        key="run.scheduler")
 
 
 class Progress:
