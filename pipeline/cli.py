@@ -25,6 +25,8 @@ def _parser() -> argparse.ArgumentParser:
         p = sub.add_parser(name, help=help_text)
         p.add_argument("scene", nargs="?", help="scene file or built-in scene name (default: the built-in default scene)")
         p.add_argument("--outdir", type=Path, help="where results go (default: outputs/<scene name>)")
+        p.add_argument("--preset", choices=("fast", "default", "accurate"),
+                       help="resolution preset for every setting the scene does not set itself")
         return p
 
     run = scene_command("run", "compute what the scene asks for, reusing up-to-date results")
@@ -36,6 +38,7 @@ def _parser() -> argparse.ArgumentParser:
     plot = scene_command("plot", "draw the figures of the scene's stages as PNG (computing what is missing)")
     plot.add_argument("--quiet", action="store_true")
     plot.add_argument("--scheduler", help="as for run")
+    scene_command("accuracy", "measure each stage's error and cost on a ladder of resolutions; NetCDF table + PNG")
     show = sub.add_parser("show", help="what is in a result file and where it came from")
     show.add_argument("file", type=Path)
     sub.add_parser("scenes", help="list the built-in scenes")
@@ -75,7 +78,7 @@ def _dispatch(args) -> int:
         return 0
     if args.command == "show":
         return _show(args.file)
-    sc = scenes.load(args.scene)
+    sc = scenes.load(args.scene, preset=args.preset)
     try:
         return _scene_command(args, sc)
     except UserError as exc:  # errors about a scene key name the scene file too
@@ -97,6 +100,12 @@ def _scene_command(args, sc) -> int:
         return 0
     if args.command == "plot":
         return _plot(sc, outdir, reporter, args.scheduler)
+    if args.command == "accuracy":
+        from .accuracy import measure
+
+        measure(sc, outdir / "accuracy")
+        print(f"accuracy table and plot in {outdir / 'accuracy'}")
+        return 0
     raise AssertionError(args.command)
 
 

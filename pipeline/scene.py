@@ -45,8 +45,9 @@ register_section(
 )
 
 TOP_LEVEL = {"name": "str", "description": "str"}
-#: keys of [numerics] that belong to the engine (chunking), not to any stage
-ENGINE_NUMERICS = ("chunks", "chunk_mb")
+#: keys of [numerics] that belong to the engine (chunking, presets), not to any stage
+ENGINE_NUMERICS = ("chunks", "chunk_mb", "preset")
+PRESETS = ("fast", "default", "accurate")
 
 
 @dataclass
@@ -59,6 +60,8 @@ class Scene:
     description: str = ""
     chunks: dict[str, int] = field(default_factory=dict)
     chunk_mb: float = 32.0
+    preset: str = "default"
+    raw: dict = field(default_factory=dict)
     variants: dict[str, "Scene"] = field(default_factory=dict)
     variant: str = "base"
 
@@ -114,8 +117,11 @@ def resolve(scene: str | None) -> Path:
     )
 
 
-def load(scene: str | Path | None) -> Scene:
-    """Read and validate a scene file (or a built-in scene name; None: the default scene)."""
+def load(scene: str | Path | None, preset: str | None = None) -> Scene:
+    """Read and validate a scene file (or a built-in scene name; None: the default scene).
+
+    ``preset`` (fast, default, accurate) overrides the scene's ``[numerics] preset``; settings
+    the scene gives explicitly always win over a preset."""
     path = resolve(str(scene) if scene is not None else None)
     try:
         raw = tomllib.loads(path.read_text(encoding="utf-8"))
@@ -123,6 +129,8 @@ def load(scene: str | Path | None) -> Scene:
         raise UserError(f"malformed TOML: {exc}", file=str(path)) from None
     except (OSError, UnicodeDecodeError) as exc:
         raise UserError(f"cannot read: {exc}", file=str(path)) from None
+    if preset is not None:
+        raw.setdefault("numerics", {})["preset"] = preset
     return from_dict(raw, path)
 
 
@@ -137,6 +145,7 @@ def from_dict(raw: dict, path: Path | None = None, *, variant: str = "base") -> 
 def _from_dict(raw: dict, path: Path | None, variant: str) -> Scene:
     schema = sections()
     raw = copy.deepcopy(raw)
+    original = copy.deepcopy(raw)
     variants_raw = raw.pop("variants", {}) if variant == "base" else {}
     for key, value in raw.items():
         if key in TOP_LEVEL:
@@ -147,10 +156,14 @@ def _from_dict(raw: dict, path: Path | None, variant: str) -> Scene:
     numerics = raw.get("numerics") if isinstance(raw.get("numerics"), dict) else None
     chunks = _chunks(numerics.pop("chunks", {}) if numerics is not None else {})
     chunk_mb = numerics.pop("chunk_mb", 32.0) if numerics is not None else 32.0
+    preset = numerics.pop("preset", "default") if numerics is not None else "default"
+    if preset not in PRESETS:
+        raise UserError(f"preset {preset!r} is not one of {', '.join(PRESETS)}{did_you_mean(str(preset), PRESETS)}",
+                        key="numerics.preset")
     if isinstance(chunk_mb, bool) or not isinstance(chunk_mb, (int, float)) or not 0.01 <= chunk_mb <= 65536:
         raise UserError(f"must be a number of MB between 0.01 and 65536, got {chunk_mb!r}", key="numerics.chunk_mb")
     base_dir = path.parent if path else None
-    values = {name: section.convert(raw.get(name), base_dir) for name, section in schema.items()}
+    values = {name: section.convert(raw.get(name), base_dir, preset=preset) for name, section in schema.items()}
     scene = Scene(
         name=raw.get("name") or (path.stem if path else "scene"),
         description=raw.get("description", ""),
@@ -158,6 +171,8 @@ def _from_dict(raw: dict, path: Path | None, variant: str) -> Scene:
         path=path,
         chunks=chunks,
         chunk_mb=float(chunk_mb),
+        preset=preset,
+        raw=original,
         variant=variant,
     )
     if not isinstance(variants_raw, dict):
@@ -166,6 +181,7 @@ def _from_dict(raw: dict, path: Path | None, variant: str) -> Scene:
     if numerics is not None:
         base_raw["numerics"]["chunks"] = dict(chunks)
         base_raw["numerics"]["chunk_mb"] = chunk_mb
+        base_raw["numerics"]["preset"] = preset
     for name, override in variants_raw.items():
         if not isinstance(override, dict):
             raise UserError("expected a table of overrides", key=f"variants.{name}")
@@ -213,7 +229,9 @@ def reference() -> str:
         "Top-level keys: `name` (names the output folder), `description`. `[numerics] chunks = { p = 1000 }`",
         "sets dask chunk sizes per sweep dimension; otherwise sweeps are chunked automatically so that a",
         "chunk's working memory stays near `[numerics] chunk_mb` (default 32). Chunking never changes results",
-        "and is not part of a result's key. `[variants.NAME]` tables override any key and are",
+        "and is not part of a result's key. `[numerics] preset = \"fast\" | \"default\" | \"accurate\"` (or",
+        "`--preset` on the command line) picks every resolution setting the scene does not set itself;",
+        "the reference lists each setting's preset values. `[variants.NAME]` tables override any key and are",
         "computed alongside (e.g. `[variants.substrate_only] solid = { kind = \"smooth\" }`).",
         "",
     ]
@@ -238,6 +256,8 @@ def reference() -> str:
                     shown = list(p.default) if isinstance(p.default, tuple) else p.default
                     default = f"`{shown}`"
                 choices = f" ({', '.join(map(str, p.choices))})" if p.choices else ""
+                if p.presets:
+                    choices += " [presets: " + ", ".join(f"{k} {v}" for k, v in {**p.presets, "default": p.default}.items()) + "]"
                 lines.append(f"| `{p.name}` | {p.kind} | {p.units or '-'} | {default} | {prefix}{p.doc}{choices} |")
         lines.append("")
     return "\n".join(lines)

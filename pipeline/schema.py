@@ -48,9 +48,13 @@ class Param:
         Allowed strings for ``choice``; also extra allowed strings for a sweep (e.g. ``"all"``).
     doc
         One-line description, shown in the scene reference.
-    dim
-        Sweep dimension name (see the attribute's comment).
+    dim, presets, ladder
+        Sweep dimension name; values per preset; coarse-to-fine values (see the attributes).
     """
+
+    def value_in(self, preset: str):
+        """This parameter's value when the user does not set it, under ``preset``."""
+        return self.presets.get(preset, self.default) if preset != "default" else self.default
 
     name: str
     kind: str = "quantity"
@@ -65,6 +69,12 @@ class Param:
     #: name of the dimension a list-valued sweep becomes (``{section}`` is replaced by the
     #: section's name, e.g. ``hrms_{section}``); default: the key's name
     dim: str | None = None
+    #: values of a resolution setting in the named presets other than "default" (whose value is
+    #: ``default``), e.g. {"fast": 20, "accurate": 100}
+    presets: Mapping[str, Any] = field(default_factory=dict)
+    #: the setting's values from coarse to fine for ``roughcontact accuracy``; the last is the
+    #: reference ("converged") value
+    ladder: tuple = ()
 
     def __post_init__(self):
         if self.kind not in KINDS:
@@ -207,7 +217,7 @@ class Section:
     def params_for(self, kind: str | None) -> tuple[Param, ...]:
         return self.params + tuple(self.variants.get(kind, ())) if kind is not None else self.params
 
-    def convert(self, raw: Any, base_dir: Path | None, key: str | None = None) -> dict | None:
+    def convert(self, raw: Any, base_dir: Path | None, key: str | None = None, preset: str = "default") -> dict | None:
         key = key or self.name
         if raw is None:
             if self.optional:
@@ -237,7 +247,7 @@ class Section:
             if name in raw:
                 out[name] = p.convert(raw[name], f"{key}.{name}", base_dir)
             elif p.default is not REQUIRED:
-                out[name] = p.default
+                out[name] = p.value_in(preset)
         missing = [n for n, p in params.items() if n not in out]
         if missing:
             raise UserError(f"missing required key(s): {', '.join(missing)}", key=key)

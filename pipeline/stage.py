@@ -86,6 +86,10 @@ class Stage:
     #: parameters, the optional outputs asked for and the upstream results (lazy or small);
     #: the engine sizes chunks with it (default 512)
     point_bytes: Callable[[Mapping[str, Any], frozenset, Mapping[str, xr.Dataset]], int] | None = None
+    #: the outputs whose error ``roughcontact accuracy`` measures (default: none: not measured)
+    main_outputs: tuple[str, ...] = ()
+    #: the relative error the default preset must reach on ``main_outputs``
+    tolerance: float = 1e-4
 
 
 @dataclass

@@ -332,5 +332,7 @@ register(
         ),
         doc="G(zeta), A/A0(p, zeta, eta) and optionally P(sigma; p, zeta, eta).",
         point_bytes=_point_bytes,
+        main_outputs=("contact_area_ratio",),
+        tolerance=1e-4,
     )
 )

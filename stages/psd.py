@@ -224,7 +224,8 @@ register_section(
 )
 register_params(
     "numerics",
-    Param("points_per_decade", "int", default=50, lo=2, doc="q grid points per decade"),
+    Param("points_per_decade", "int", default=50, lo=2, presets={"fast": 20, "accurate": 100},
+          ladder=(10, 14, 20, 35, 50, 70, 100, 200, 400), doc="q grid points per decade"),
     doc="resolution of the numerical methods",
 )
 

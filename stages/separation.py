@@ -290,8 +290,10 @@ register_section(
 register_params(
     "numerics",
     Param("separation_panels_per_decade", "int", default=4, lo=1,
+          presets={"fast": 2, "accurate": 8}, ladder=(1, 2, 2, 3, 4, 6, 8, 16),
           doc="geometric panels per decade of s = 1/w in the separation integral"),
     Param("separation_gauss_points", "int", default=4, lo=1, hi=64,
+          presets={"fast": 3, "accurate": 6}, ladder=(2, 2, 3, 3, 4, 4, 6, 10),
           doc="Gauss-Legendre nodes per panel in the separation integral"),
     Param("separation_depth", "quantity", "", default=10.0, lo=1.0, hi=100.0,
           doc="decades of s below 1/w(q_max) resolved by panels (closed form below)"),
@@ -460,5 +462,7 @@ register(
         coords={"zeta": Var("1", "magnification"), "p": Var("Pa", "nominal pressure")},
         figures=(Figure("fig5_separation", "log10(p/E*) against u (seed Fig. 5)", ("separation",), figure_separation),),
         doc="Mean interfacial separation u(p, zeta, eta) (eq 57) and its small-pressure law u0, beta (eqs 59-60).",
+        main_outputs=("mean_separation",),
+        tolerance=1e-4,
     )
 )
