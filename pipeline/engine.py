@@ -98,6 +98,11 @@ def _plan_stage(scene, variant, st, outdir, keys, targets, force) -> StagePlan:
         value = _dotted(scene, f.param)
         if value is None:
             continue
+        if isinstance(value, (list, tuple)):  # a `paths` parameter: several files, read one by one
+            file_paths[f.param] = tuple(Path(v) for v in value)
+            inputs += [{"param": f"{f.param}[{i}]", "path": str(v), "sha256": store.file_sha256(Path(v))}
+                       for i, v in enumerate(value)]
+            continue
         file_paths[f.param] = Path(value)
         inputs.append({"param": f.param, "path": str(value), "sha256": store.file_sha256(Path(value))})
     upstream = {up: keys[up] for up in (st.needed(scene.values) if st.needed else st.requires)}
@@ -236,7 +241,7 @@ def run(scene: Scene, outdir: Path, targets: Iterable[str] | None = None, force:
             continue
         report(f"{tag}: computing ({'; '.join(p.reasons)})")
         t0 = time.perf_counter()
-        files = {param: READERS[_reader(p.stage, param)](path) for param, path in p.file_paths.items()}
+        files = {param: _read(p.stage, param, path) for param, path in p.file_paths.items()}
         inp = StageInput(
             params=p.params,
             upstream={up: results[p.variant][up] for up in p.record["upstream"]},
@@ -253,6 +258,12 @@ def run(scene: Scene, outdir: Path, targets: Iterable[str] | None = None, force:
 
 def _reader(st: Stage, param: str) -> str:
     return next(f.reader for f in st.files if f.param == param)
+
+
+def _read(st: Stage, param: str, path):
+    """One loaded file, or a list of them for a ``paths`` parameter."""
+    reader = READERS[_reader(st, param)]
+    return [reader(p) for p in path] if isinstance(path, tuple) else reader(path)
 
 
 def _has_dask(ds: xr.Dataset) -> bool:
