@@ -198,6 +198,23 @@ def _jsonable(value):
     return str(value)
 
 
+def _explain_by_suffix(path: Path) -> None:
+    """When format detection failed for a file whose suffix names a format, open it with that
+    format's reader and raise its error as "corrupt or truncated" (detection alone only says
+    that no reader recognised the file)."""
+    from SurfaceTopography import open_topography
+    from SurfaceTopography.IO import readers
+
+    suffix = path.suffix.lower().lstrip(".")
+    formats = [r.format() for r in readers if suffix in r.file_extensions()]
+    for fmt in formats[:1]:
+        try:
+            open_topography(str(path), format=fmt).topography()
+        except Exception as exc:  # noqa: BLE001 - any reader error means the file is damaged
+            raise UserError(f"corrupt or truncated {fmt} file ({exc.__class__.__name__}: {str(exc)[:160]})",
+                            file=str(path)) from None
+
+
 def read_topography(path: Path) -> Topography:
     """Read a height map or line scan with SurfaceTopography (default channel).
 
@@ -242,6 +259,7 @@ def read_topography(path: Path) -> Topography:
     except UserError:
         raise
     except (CannotDetectFileFormat, UnknownFileFormat) as exc:
+        _explain_by_suffix(path)  # a damaged file of a known format: say what its reader found
         tried = ", ".join(re.findall(r"tried (\w+)Reader", str(exc))) or "all readers"
         raise UserError(f"unknown or unsupported topography format (SurfaceTopography tried {tried})",
                         file=str(path)) from None
