@@ -331,6 +331,7 @@ def test_measured_eta_feeds_the_combined_psd(tmp_path):
         ("no_unit", "height_unit"),
         ("mismatch", "needs paired topographies on the same grid"),
         ("outside_grid", "reaches outside the measured range"),
+        ("measured_eta_one_surface", "eta = 'measured' needs both surfaces of kind 'topography'"),
     ],
 )
 def test_bad_input_gives_a_clear_error(tmp_path, case, message):
@@ -367,6 +368,10 @@ def test_bad_input_gives_a_clear_error(tmp_path, case, message):
         np.save(tmp_path / "other.npy", rng.standard_normal((32, 16)))
         raw["solid"] = _surface(str(tmp_path / "other.npy"), **spec)
         raw["interface"] = {"eta": "measured"}
+    elif case == "measured_eta_one_surface":
+        raw["interface"] = {"eta": "measured"}
+        raw["solid"] = {"kind": "self_affine", "H": 0.8, "qL": "1e5 1/m", "q1": "1e8 1/m", "hrms": "1 nm"}
+        targets = ("psd_combined",)
     elif case == "outside_grid":
         raw["grid"] = {"q_min": "1e3 1/m"}
         targets = ("psd_combined",)
