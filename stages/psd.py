@@ -383,7 +383,9 @@ def compute_psd(inp: StageInput) -> xr.Dataset:
     both = _rough(inp["substrate"]) and _rough(inp["solid"])
     if isinstance(inp["interface.eta"], str):  # "measured": eta(q) from paired topographies
         if "topography" not in inp.upstream or "coherence" not in inp.upstream["topography"]:
-            raise UserError("eta = 'measured' needs both surfaces of kind 'topography', paired", key="interface.eta")
+            why = inp.upstream["topography"].attrs.get("pairing", "") if "topography" in inp.upstream else ""
+            raise UserError("eta = 'measured' needs both surfaces of kind 'topography', paired on the same grid"
+                            + (f" ({why})" if why else ""), key="interface.eta")
         eta_q = xr.DataArray(measured_coherence_on_grid(inp.upstream["topography"], q_values), dims=("q",))
         combined = xr.apply_ufunc(psd_combined, surfaces["substrate"], surfaces["solid"], eta_q.assign_coords(q=q),
                                   dask="parallelized", output_dtypes=[float])

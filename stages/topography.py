@@ -468,13 +468,7 @@ def compute_topography(inp: StageInput) -> xr.Dataset:
     edges = log_bin_edges(q_lo, q_hi, bpd)
     centres = np.sqrt(edges[1:] * edges[:-1])
     data_vars = {}
-    eta_wanted = isinstance(inp["interface.eta"], str) and inp["interface.eta"] == "measured"
-    pair_note = None
-    if len(specs) == 2:
-        pair_note = _pairing_problem(prepared["substrate"], prepared["solid"])
-        if pair_note and eta_wanted:
-            raise UserError(f"eta = 'measured' needs paired topographies on the same grid: {pair_note}",
-                            key="interface.eta")
+    pair_note = _pairing_problem(prepared["substrate"], prepared["solid"]) if len(specs) == 2 else None
     paired = len(specs) == 2 and pair_note is None
     spectra = {}
     if paired:
@@ -482,8 +476,6 @@ def compute_topography(inp: StageInput) -> xr.Dataset:
         spectra["substrate"] = joint
         spectra["solid"] = [{"n": s["n"], "q": s["q"], "C11": s["C22"]} for s in joint]
     else:
-        if eta_wanted:
-            raise UserError("eta = 'measured' needs both surfaces of kind 'topography'", key="interface.eta")
         for name in specs:
             spectra[name] = [_spectra(p, edges, specs[name]) for p in prepared[name]]
     keep = np.zeros(centres.size, bool)
@@ -518,7 +510,8 @@ def compute_topography(inp: StageInput) -> xr.Dataset:
     ds = xr.Dataset({k: (d, v[sl], a) for k, (d, v, a) in data_vars.items()},
                     coords={"q_bin": ("q_bin", centres[sl], {"units": "1/m", "long_name": "wavenumber (geometric bin centre)"})})
     ds.attrs["bins_per_decade"] = bpd
-    ds.attrs["pairing"] = "paired: file i of the substrate with file i of the solid" if paired else (pair_note or "one surface only")
+    ds.attrs["pairing"] = ("paired: file i of the substrate with file i of the solid" if paired else
+                           f"not paired: {pair_note}" if pair_note else "not paired: one surface only")
     return ds
 
 
@@ -621,7 +614,7 @@ register(
         name="topography",
         version="1",
         compute=compute_topography,
-        params=("substrate", "solid", "interface.eta", "numerics.topography_bins_per_decade"),
+        params=("substrate", "solid", "numerics.topography_bins_per_decade"),
         files=(FileInput("substrate.files", reader="topography"), FileInput("solid.files", reader="topography")),
         outputs={
             **{f"psd_{s}_measured": Var("m^4", f"measured PSD of the {s} (Persson convention)") for s in SURFACES},

@@ -329,7 +329,7 @@ def test_measured_eta_feeds_the_combined_psd(tmp_path):
         ("unknown", "unknown or unsupported topography format"),
         ("nan", r"1 of 1024 heights are missing \(NaN or masked\), first at index \(3, 5\)"),
         ("no_unit", "height_unit"),
-        ("mismatch", "needs paired topographies on the same grid"),
+        ("mismatch", r"paired on the same grid \(not paired: file pair 0: grids differ"),
         ("outside_grid", "reaches outside the measured range"),
         ("measured_eta_one_surface", "eta = 'measured' needs both surfaces of kind 'topography'"),
     ],
@@ -368,9 +368,11 @@ def test_bad_input_gives_a_clear_error(tmp_path, case, message):
         np.save(tmp_path / "other.npy", rng.standard_normal((32, 16)))
         raw["solid"] = _surface(str(tmp_path / "other.npy"), **spec)
         raw["interface"] = {"eta": "measured"}
+        targets = ("psd_combined",)
     elif case == "measured_eta_one_surface":
         raw["interface"] = {"eta": "measured"}
         raw["solid"] = {"kind": "self_affine", "H": 0.8, "qL": "1e5 1/m", "q1": "1e8 1/m", "hrms": "1 nm"}
+        raw["substrate"]["extend"] = "power_law"
         targets = ("psd_combined",)
     elif case == "outside_grid":
         raw["grid"] = {"q_min": "1e3 1/m"}
