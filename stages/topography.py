@@ -92,10 +92,16 @@ def hann_window_radial(nx: int, ny: int, sx: float, sy: float) -> np.ndarray:
     SurfaceTopography's ``get_window_2D``)."""
     x = (np.arange(nx) - nx // 2) * (sx / nx)
     y = (np.arange(ny) - ny // 2) * (sy / ny)
-    r = np.sqrt(x[:, None] ** 2 + y[None, :] ** 2)
+    w = np.hypot(x[:, None], y[None, :])  # r, turned into the window in place (one map of memory)
     rmax = min(sx, sy) / 2.0
-    w = np.where(r < rmax, 0.5 * (1.0 + np.cos(np.pi * r / rmax)), 0.0)
-    return w / np.sqrt(np.mean(w * w))
+    outside = w >= rmax
+    w *= np.pi / rmax
+    np.cos(w, out=w)
+    w += 1.0
+    w *= 0.5
+    w[outside] = 0.0
+    w /= np.sqrt(np.mean(w * w))
+    return w
 
 
 def log_bin_edges(q_lo: float, q_hi: float, bins_per_decade: int) -> np.ndarray:
