@@ -478,7 +478,16 @@ def compute_topography(inp: StageInput) -> xr.Dataset:
     paired = len(specs) == 2 and pair_note is None
     spectra = {}
     if paired:
-        joint = [_spectra(p, edges, specs["substrate"], r) for p, r in zip(prepared["substrate"], prepared["solid"])]
+        joint = []
+        for p, r in zip(prepared["substrate"], prepared["solid"]):
+            # a pair uses the modes reliable in both files; each surface keeps its own line-scan H
+            both = dict(p, q_max=min(p["q_max"], r["q_max"]))
+            s = _spectra(both, edges, specs["substrate"], r)
+            if p["analysis"] == "profiles":
+                ratio = float(isotropic_factor(specs["solid"]["hurst"]) / isotropic_factor(specs["substrate"]["hurst"]))
+                s["C22"] = s["C22"] * ratio
+                s["C12"] = s["C12"] * math.sqrt(ratio)  # keeps eta = C12 / sqrt(C11 C22) free of the conversion
+            joint.append(s)
         spectra["substrate"] = joint
         spectra["solid"] = [{"n": s["n"], "q": s["q"], "C11": s["C22"]} for s in joint]
     else:

@@ -428,3 +428,22 @@ def test_window_recovers_the_psd_of_a_nonperiodic_crop(tmp_path):
     assert np.all(np.abs(ratio - 1) < 4 * 2 / np.sqrt(modes[band]))
     assert abs(np.mean(ratio) - 1) < 0.1
     assert "'window': 'hann'" in str(eval(res["psd_substrate_measured"].attrs["files"].replace("true", "True").replace("false", "False")))
+
+
+def test_paired_line_scans_keep_each_surfaces_conversion(tmp_path):
+    """Paired line scans: eta of identical profiles is exactly 1 whatever H each surface assumes,
+    and each PSD carries its own c(H) conversion (C2 / C1 = c(H2) / c(H1))."""
+    pytest.importorskip("SurfaceTopography")
+    rng = np.random.default_rng(13)
+    profile = np.cumsum(rng.standard_normal(512)) * 1e-9  # a Brownian (H = 1/2) profile
+    np.save(tmp_path / "p.npy", profile)
+    common = dict(height_unit="m", size_x="10 um")
+    raw = {"substrate": _surface(str(tmp_path / "p.npy"), hurst=0.5, **common),
+           "solid": _surface(str(tmp_path / "p.npy"), hurst=0.8, **common)}
+    res = _run(tmp_path, raw, targets=("topography",))["topography"]
+    eta = res["coherence"].values
+    assert np.all(eta[np.isfinite(eta)] == pytest.approx(1.0, abs=1e-12))
+    C1, C2 = res["psd_substrate_measured"].values, res["psd_solid_measured"].values
+    ok = np.isfinite(C1)
+    assert np.allclose(C2[ok] / C1[ok], isotropic_factor(0.8) / isotropic_factor(0.5), rtol=1e-12)
+    assert "isotropic_conversion" in res["psd_solid_measured"].attrs["files"]
