@@ -225,7 +225,6 @@ def read_topography(path: Path) -> Topography:
     """
     path = Path(path)
     try:
-        import SurfaceTopography as st_pkg  # noqa: F401
         from SurfaceTopography import open_topography
         from SurfaceTopography.Exceptions import CannotDetectFileFormat, ReadFileError, UnknownFileFormat
     except ImportError as exc:

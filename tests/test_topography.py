@@ -7,6 +7,7 @@ SurfaceTopography's convention, unit invariance) or a clear error on bad input.
 
 from __future__ import annotations
 
+import json
 import sys
 from pathlib import Path
 
@@ -427,7 +428,8 @@ def test_window_recovers_the_psd_of_a_nonperiodic_crop(tmp_path):
     assert band.sum() >= 8
     assert np.all(np.abs(ratio - 1) < 4 * 2 / np.sqrt(modes[band]))
     assert abs(np.mean(ratio) - 1) < 0.1
-    assert "'window': 'hann'" in str(eval(res["psd_substrate_measured"].attrs["files"].replace("true", "True").replace("false", "False")))
+    (described,) = json.loads(res["psd_substrate_measured"].attrs["files"])
+    assert described["window"] == "hann" and described["detrend"] == "plane" and described["periodic"] is False
 
 
 def test_paired_line_scans_keep_each_surfaces_conversion(tmp_path):
