@@ -98,6 +98,11 @@ def _plan_stage(scene, variant, st, outdir, keys, targets, force) -> StagePlan:
         value = _dotted(scene, f.param)
         if value is None:
             continue
+        if isinstance(value, (list, tuple)):  # a `paths` parameter: several files, read one by one
+            file_paths[f.param] = tuple(Path(v) for v in value)
+            inputs += [{"param": f"{f.param}[{i}]", "path": str(v), "sha256": store.file_sha256(Path(v))}
+                       for i, v in enumerate(value)]
+            continue
         file_paths[f.param] = Path(value)
         inputs.append({"param": f.param, "path": str(value), "sha256": store.file_sha256(Path(value))})
     upstream = {up: keys[up] for up in (st.needed(scene.values) if st.needed else st.requires)}
@@ -246,7 +251,7 @@ def _run(scene, outdir, targets, force, report, compute_with):
             continue
         report(f"{tag}: computing ({'; '.join(p.reasons)})")
         t0 = time.perf_counter()
-        files = {param: READERS[_reader(p.stage, param)](path) for param, path in p.file_paths.items()}
+        files = {param: _read(p.stage, param, path) for param, path in p.file_paths.items()}
         upstream = {up: results[p.variant][up] for up in p.record["upstream"]}
         inp = StageInput(
             params=p.params,
@@ -283,3 +288,7 @@ def _reader(st: Stage, param: str) -> str:
     return next(f.reader for f in st.files if f.param == param)
 
 
+def _read(st: Stage, param: str, path):
+    """One loaded file, or a list of them for a ``paths`` parameter."""
+    reader = READERS[_reader(st, param)]
+    return [reader(p) for p in path] if isinstance(path, tuple) else reader(path)

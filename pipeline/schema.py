@@ -24,8 +24,9 @@ REQUIRED = object()
 #:   quantity  one number with units (``units`` is the SI target)
 #:   sweep     a quantity, or a list / range of them (a list becomes a sweep dimension)
 #:   int, bool, str, choice, path (a file, resolved against the scene's folder)
+#:   paths     one or more files (a string or a list of strings), each resolved like ``path``
 #:   list      a list of strings; intlist: a list of whole numbers
-KINDS = ("quantity", "sweep", "int", "bool", "str", "choice", "path", "list", "intlist")
+KINDS = ("quantity", "sweep", "int", "bool", "str", "choice", "path", "paths", "list", "intlist")
 
 
 @dataclass(frozen=True)
@@ -119,6 +120,12 @@ class Param:
             for x in raw:
                 self._bounded(x, key)
             return tuple(raw)
+        if k == "paths":
+            items = [raw] if isinstance(raw, str) else raw
+            if not isinstance(items, list) or not items or not all(isinstance(x, str) for x in items):
+                raise UserError(f"expected a file path or a non-empty list of them, got {raw!r}", key=key)
+            single = Param(self.name, "path")
+            return tuple(single.convert(x, f"{key}[{i}]" if len(items) > 1 else key, base_dir) for i, x in enumerate(items))
         if k == "path":
             if not isinstance(raw, str):
                 raise UserError(f"expected a file path, got {raw!r}", key=key)

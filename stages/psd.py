@@ -19,6 +19,7 @@ from pipeline.stage import FileInput, Stage, StageInput, Var, register, register
 from pipeline.units import array_to_si
 
 from .quadrature import integral, log_grid, loglog_interp
+from .topography import TOPOGRAPHY_PARAMS, measured_coherence_on_grid, measured_psd_on_grid, needs_topography
 
 # ----------------------------------------------------------------------------------------
 # Kernels (pure numpy)
@@ -196,7 +197,7 @@ def _surface_section(name: str, doc: str) -> Section:
         doc=doc,
         optional=True,
         discriminator="kind",
-        variants={"self_affine": _SELF_AFFINE, "psd_file": _PSD_FILE, "smooth": ()},
+        variants={"self_affine": _SELF_AFFINE, "psd_file": _PSD_FILE, "topography": TOPOGRAPHY_PARAMS, "smooth": ()},
         check=_check_surface,
     )
 
@@ -206,7 +207,8 @@ register_section(_surface_section("solid", "the elastic solid's surface (absent 
 register_section(
     Section(
         "interface",
-        (Param("eta", "sweep", "", default=0.0, lo=-1.0, hi=1.0, doc="coherence of the two surfaces; a list is a sweep"),),
+        (Param("eta", "sweep", "", default=0.0, lo=-1.0, hi=1.0, choices=("measured",),
+               doc="coherence of the two surfaces; a list is a sweep; 'measured': eta(q) from paired topographies"),),
         doc="how the two surfaces' roughness is correlated",
     )
 )
@@ -325,6 +327,11 @@ def _q_range(inp: StageInput) -> tuple[float, float, list[float]]:
             lows.append(spec["qL"])
             highs.append(spec["q1"])
             knots += [spec["qL"], spec["q0"], spec["q1"]]
+        elif spec["kind"] == "topography":  # measured range, from the topography stage
+            ds = inp.upstream["topography"]
+            q = ds[f"q_{name}_measured"].values[np.isfinite(ds[f"psd_{name}_measured"].values)]
+            lows.append(float(np.nanmin(q)))
+            highs.append(float(np.nanmax(q)))
         else:
             loaded = inp.files[f"{name}.path"]
             if isinstance(loaded, xr.Dataset):
@@ -366,6 +373,9 @@ def compute_psd(inp: StageInput) -> xr.Dataset:
                 C0 = xr.DataArray(spec["C0"])
             shape = xr.DataArray(self_affine_psd(q_values, spec["H"], spec["qL"], spec["q0"], spec["q1"], 1.0), dims=("q",))
             da = C0 * shape
+        elif spec["kind"] == "topography":
+            values, attrs = measured_psd_on_grid(inp.upstream["topography"], name, q_values, spec["extend"])
+            da = xr.DataArray(values, dims=("q",))
         else:
             values, attrs = _measured(name, spec, inp.files[f"{name}.path"], q_values)
             da = xr.DataArray(values, dims=("q",))
@@ -373,7 +383,17 @@ def compute_psd(inp: StageInput) -> xr.Dataset:
         da.attrs = {"units": "m^4", "long_name": f"power spectral density of the {name} (C{index}, Persson convention)", **attrs}
         surfaces[name] = da
     both = _rough(inp["substrate"]) and _rough(inp["solid"])
-    if both:
+    if isinstance(inp["interface.eta"], str):  # "measured": eta(q) from paired topographies
+        if "topography" not in inp.upstream or "coherence" not in inp.upstream["topography"]:
+            why = inp.upstream["topography"].attrs.get("pairing", "") if "topography" in inp.upstream else ""
+            raise UserError("eta = 'measured' needs both surfaces of kind 'topography', paired on the same grid"
+                            + (f" ({why})" if why else ""), key="interface.eta")
+        eta_q = xr.DataArray(measured_coherence_on_grid(inp.upstream["topography"], q_values), dims=("q",))
+        combined = xr.apply_ufunc(psd_combined, surfaces["substrate"], surfaces["solid"], eta_q.assign_coords(q=q),
+                                  dask="parallelized", output_dtypes=[float])
+        how = ("C = (sqrt C1 - eta sqrt C2)^2 + (1 - eta^2) C2 (eq 52) with the measured eta(q) of the topography "
+               "stage (interpolated in log q, held constant beyond the measured range)")
+    elif both:
         eta = inp.sweep("eta", inp["interface.eta"], "1", "coherence of the two surfaces' roughness")
         combined = xr.apply_ufunc(
             psd_combined, surfaces["substrate"], surfaces["solid"], eta, dask="parallelized", output_dtypes=[float]
@@ -408,6 +428,8 @@ register(
         compute=compute_psd,
         params=("substrate", "solid", "interface.eta", "grid.q_min", "grid.q_max", "numerics.points_per_decade"),
         files=(_files("substrate"), _files("solid")),
+        requires=("topography",),
+        needed=lambda values: ("topography",) if needs_topography(values) else (),
         outputs={
             "psd_substrate": Var("m^4", "power spectral density of the substrate (C1)"),
             "psd_solid": Var("m^4", "power spectral density of the elastic solid (C2)"),
