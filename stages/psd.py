@@ -19,7 +19,13 @@ from pipeline.stage import FileInput, Stage, StageInput, Var, register, register
 from pipeline.units import array_to_si
 
 from .quadrature import integral, log_grid, loglog_interp
-from .topography import TOPOGRAPHY_PARAMS, measured_coherence_on_grid, measured_psd_on_grid, needs_topography
+from .topography import (
+    TOPOGRAPHY_PARAMS,
+    isotropic_factor,
+    measured_coherence_on_grid,
+    measured_psd_on_grid,
+    needs_topography,
+)
 
 # ----------------------------------------------------------------------------------------
 # Kernels (pure numpy)
@@ -122,19 +128,25 @@ CONVENTIONS = {
     "contact.engineering": ("m^4", "C(q) = C_ST(q) / (2 pi)^2 (contact.engineering / SurfaceTopography convention)"),
     "1d": (
         "m^3",
-        "C(q) = C1D(q) / (pi q) from a 1D profile PSD; this isotropic conversion is exact only for H = 1/2",
+        "C(q) = c(H) C1D(q) / q, c(H) = Gamma(1+H) / (2 pi^1.5 Gamma(H+1/2)) (= 1/(4 pi) at H = 1/2), from a "
+        "1D profile PSD with hrms^2 = (1/pi) int_0^inf C1D dq; exact only for an isotropic self-affine "
+        "surface with that Hurst exponent (equations.md's C1D/(pi q) is 4x too large)",
     ),
 }
 
 
-def psd_to_persson(q, values, convention):
-    """Convert a measured PSD in ``convention`` to Persson's C(q) in m^4 (see CONVENTIONS)."""
+def psd_to_persson(q, values, convention, hurst=0.5):
+    """Convert a measured PSD in ``convention`` to Persson's C(q) in m^4 (see CONVENTIONS).
+
+    For a 1D profile PSD, C1D(q) = 2 pi \\int dq_y C(sqrt(q^2 + q_y^2)), which for
+    C ~ q^(-2(1+H)) inverts to C = c(H) C1D / q (:func:`stages.topography.isotropic_factor`).
+    """
     if convention == "persson":
         return values
     if convention == "contact.engineering":
         return values / (2.0 * np.pi) ** 2
     if convention == "1d":
-        return values / (np.pi * q)
+        return isotropic_factor(hurst) * values / q
     raise ValueError(convention)
 
 
@@ -185,6 +197,8 @@ _PSD_FILE = (
     Param("q_unit", "str", default=None, doc="unit of the q column (else from the header)"),
     Param("C_unit", "str", default=None, doc="unit of the C column (else from the header)"),
     Param("convention", "choice", default="persson", choices=tuple(CONVENTIONS), doc="PSD convention of the file"),
+    Param("hurst", "quantity", "", default=0.5, lo=0.0, hi=1.0, lo_open=True,
+          doc="Hurst exponent assumed by the '1d' (profile) conversion"),
     Param("variable", "str", default=None, doc="NetCDF: name of the PSD variable (default: the only one over q)"),
     Param("extend", "choice", default="none", choices=("none", "power_law", "zero"),
           doc="how to extend beyond the file's q range (none: error)"),
@@ -299,7 +313,7 @@ def _measured(name: str, spec: dict, loaded, q_grid: np.ndarray) -> tuple[np.nda
         raise UserError("q is not strictly increasing", file=path, key=where(bad[0] + 1))
     if q_si.size < 2:
         raise UserError("needs at least two data rows", file=path)
-    C = psd_to_persson(q_si, c_si, convention)
+    C = psd_to_persson(q_si, c_si, convention, spec.get("hurst", 0.5))
     how = spec["extend"]
     lo, hi = q_grid[0], q_grid[-1]
     if how == "none" and (lo < q_si[0] * (1 - 1e-9) or hi > q_si[-1] * (1 + 1e-9)):

@@ -84,19 +84,29 @@ def _write_table(path, q, c, header="# q [1/m]  C [m^4]"):
     return path
 
 
-@pytest.mark.parametrize("convention", ["persson", "contact.engineering", "1d"])
-def test_measured_psd_file_conventions_convert_to_persson(run_scene, tmp_path, convention):
+def _profile_psd(q, H, A):
+    """C1D(q) = 2 pi int dq_y C(sqrt(q^2 + q_y^2)) for an unbounded power law C = A q^(-2(1+H)),
+    by quadrature (independent of the closed form the stage uses)."""
+    from scipy import integrate
+
+    f = lambda qy, qx: A * (qx * qx + qy * qy) ** (-(1 + H))  # noqa: E731
+    return np.array([2 * 2 * np.pi * integrate.quad(f, 0, np.inf, args=(qx,), epsrel=1e-12)[0] for qx in q])
+
+
+@pytest.mark.parametrize("convention, H", [("persson", 0.8), ("contact.engineering", 0.8), ("1d", 0.5), ("1d", 0.8)])
+def test_measured_psd_file_conventions_convert_to_persson(run_scene, tmp_path, convention, H):
     q = log_grid(1e8, 1e11, 40)
-    C = self_affine_psd(q, 0.8, 1e8, 1e8, 1e11, 1e-36)
-    given = {"persson": C, "contact.engineering": C * (2 * np.pi) ** 2, "1d": C * np.pi * q}[convention]
+    A = 1e-36 * 1e8 ** (2 * (1 + H))
+    C = A * q ** (-2 * (1 + H))
+    given = {"persson": C, "contact.engineering": C * (2 * np.pi) ** 2, "1d": _profile_psd(q, H, A)}[convention]
     unit = "m^3" if convention == "1d" else "m^4"
     path = _write_table(tmp_path / "psd.txt", q, given, header=f"# q [1/m]  C [{unit}]")
-    surf = {"kind": "psd_file", "path": str(path), "convention": convention}
+    surf = {"kind": "psd_file", "path": str(path), "convention": convention, "hurst": H}
     res = run_scene(make_scene(substrate=surf, solid=None, grid={"q_min": "2e8 1/m", "q_max": "4e10 1/m"},
                                outputs={"variables": ["psd_combined"]}))
     psd = res["base"]["psd"]
-    expected = self_affine_psd(psd["q"].values, 0.8, 1e8, 1e8, 1e11, 1e-36)
-    assert np.allclose(psd["psd_substrate"].values, expected, rtol=1e-9)
+    expected = A * psd["q"].values ** (-2 * (1 + H))
+    assert np.allclose(psd["psd_substrate"].values, expected, rtol=1e-8)
     assert convention in psd["psd_substrate"].attrs["psd_convention"]
     assert "H = 1/2" in psd["psd_substrate"].attrs["conversion"] if convention == "1d" else True
 
