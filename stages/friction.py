@@ -176,7 +176,7 @@ register_section(
 )
 register_params(
     "numerics",
-    Param("friction_phi_nodes", "int", default=24, lo=2, doc="Gauss-Legendre nodes of the friction angular integrals"),
+    Param("friction_phi_nodes", "int", default=16, lo=2, doc="Gauss-Legendre nodes of the friction angular integrals"),
     Param("friction_segment_nodes", "int", default=12, lo=2,
           doc="Gauss-Legendre nodes per q segment of the friction integral (integrated in the variable G)"),
 )
@@ -219,13 +219,15 @@ def compute_friction(inp: StageInput) -> xr.Dataset:
     mu.attrs = {"units": "1", "long_name": "hysteretic friction coefficient mu (eq 61)",
                 "formula": f"mu = 2/((1-nu^2) sigma0) int dq q^3 C P S int_0^(pi/2) cos(phi) E''(q v cos phi) dphi, {S_text}"}
     area.attrs = {"units": "1", "long_name": "relative contact area while sliding A/A0 = P(q1) (eqs 31, 62)"}
-    ds = xr.Dataset({"friction_coefficient": mu.transpose(..., "v"), "sliding_contact_area_ratio": area.transpose(..., "v")})
+    last = ("v",) if v.ndim else ()
+    ds = xr.Dataset({"friction_coefficient": mu.transpose(..., *last),
+                     "sliding_contact_area_ratio": area.transpose(..., *last)})
     if "sliding_G" in inp.wanted:
-        G = outputs[2].transpose(..., "v", "q")
+        G = outputs[2].transpose(..., *last, "q")
         G.attrs = {"units": "1", "long_name": "G(q; v) of eq 62 (corrected: |E|^2, upper limit q), sigma0^2 absorbed"}
         ds["sliding_G"] = G
     if "friction_density" in inp.wanted:
-        d = outputs[3].transpose(..., "v", "q")
+        d = outputs[3].transpose(..., *last, "q")
         d.attrs = {"units": "1", "long_name": "contribution to mu per unit ln q, d mu / d ln q"}
         ds["friction_density"] = d
     if "q" in ds.coords:
@@ -360,7 +362,7 @@ def figure_psds(results):
     return fig
 
 
-register(
+STAGE = register(
     Stage(
         name="friction",
         version="1",

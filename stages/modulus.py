@@ -254,7 +254,7 @@ def complex_modulus(ds: xr.Dataset) -> xr.DataArray:
 
 _COMMON = (
     Param("T", "sweep", "K", default=None, lo=0.0, lo_open=True,
-          doc="temperature(s) of the solid (a list is a sweep); default T_ref"),
+          doc="temperature(s) of the solid (a list is a sweep); default T_ref, else 20 degC"),
     Param("T_ref", "quantity", "K", default=None, lo=0.0, lo_open=True,
           doc="reference temperature of the model parameters or of the measured master curve"),
     Param("shift", "choice", default="none", choices=("none", "wlf", "table"),
@@ -313,9 +313,8 @@ def _check_modulus(values: dict, key: str) -> None:
     if needs_ref and values["T_ref"] is None:
         raise UserError("give T_ref (the temperature of the model parameters or of the master curve)", key=f"{key}.T_ref")
     if values["T"] is None:
-        if values["T_ref"] is None:
-            raise UserError("give T (the temperature of the solid) or T_ref", key=f"{key}.T")
-        values["T"] = values["T_ref"]
+        # no temperature dependence without a shift: T only labels the result
+        values["T"] = values["T_ref"] if values["T_ref"] is not None else 293.15
     T = np.atleast_1d(values["T"])
     if shift == "wlf":
         if np.any(values["C2"] + T - values["T_ref"] <= 0):
