@@ -161,12 +161,15 @@ def friction_kernel(q, C, A, B, sigma0, nu, correction="none", gamma=0.5, extras
 # Scene section and numerics
 # ----------------------------------------------------------------------------------------
 
+#: velocities when the scene gives none: 1e-9 .. 1e3 m/s, 6 points per decade
+DEFAULT_VELOCITIES = np.geomspace(1e-9, 1e3, 73)
+
 register_section(
     Section(
         "friction",
         (
-            Param("v", "sweep", "m/s", default=np.geomspace(1e-9, 1e3, 61), lo=0.0, lo_open=True, hi=1e6,
-                  doc="sliding velocity; a list or {from, to, num} is a sweep (default 1e-9..1e3 m/s, 61 points)"),
+            Param("v", "sweep", "m/s", default=None, lo=0.0, lo_open=True, hi=1e6,
+                  doc="sliding velocity; a list or {from, to, num} is a sweep (default 1e-9..1e3 m/s, 73 points)"),
             Param("correction", "choice", default="none", choices=("none", "yang_persson"),
                   doc="S(q) in mu: none (S = 1, the seed) or yang_persson (S = gamma + (1 - gamma) P^2)"),
             Param("gamma", "quantity", "", default=0.5, lo=0.0, hi=1.0, doc="gamma of the yang_persson correction"),
@@ -198,7 +201,8 @@ def compute_friction(inp: StageInput) -> xr.Dataset:
     n_phi = int(inp["numerics.friction_phi_nodes"])
     n_seg = int(inp["numerics.friction_segment_nodes"])
     correction, gamma = inp["friction.correction"], float(inp["friction.gamma"])
-    v = inp.sweep("v", inp["friction.v"], "m/s", "sliding velocity")
+    v_values = inp["friction.v"] if inp["friction.v"] is not None else DEFAULT_VELOCITIES
+    v = inp.sweep("v", v_values, "m/s", "sliding velocity")
     p = inp.sweep("p", inp["load.p"], "Pa", "nominal pressure sigma0")
     omega = mod["omega"]
 
@@ -235,7 +239,7 @@ def compute_friction(inp: StageInput) -> xr.Dataset:
     for sweep in (v, p):
         if sweep.ndim == 0:
             ds = ds.assign_coords({sweep.name: sweep})
-    needed_hi = float(q.values[-1] * np.max(inp["friction.v"]))
+    needed_hi = float(q.values[-1] * np.max(v_values))
     ds.attrs = {
         "angular_quadrature": f"Gauss-Legendre, {n_phi} nodes on [0, pi/2]",
         "q_quadrature": ("G: piecewise power law on the psd stage's q grid; mu: in the variable G, "
@@ -291,7 +295,7 @@ def _curves(results, which: str, etas: tuple[float, ...] | None):
     return out
 
 
-def _friction_figure(results, which, etas, title, ylabel):
+def _friction_figure(results, which, etas, title, ylabel, logy=False):
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(5.8, 4.3))
@@ -303,8 +307,11 @@ def _friction_figure(results, which, etas, title, ylabel):
     ax.set_xlabel("sliding velocity v (m/s)")
     ax.set_ylabel(ylabel)
     ax.set_title(title + (f"\n({'; '.join(sorted(notes))})" if notes else ""), fontsize=10)
-    ax.set_ylim(bottom=0)
-    ax.grid(True, alpha=0.3)
+    if logy:
+        ax.set_yscale("log")
+    else:
+        ax.set_ylim(bottom=0)
+    ax.grid(True, which="both" if logy else "major", alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
     return fig
@@ -317,7 +324,7 @@ def figure_mu_substrate(results):
 
 def figure_area_substrate(results):
     return _friction_figure(results, "sliding_contact_area_ratio", None,
-                            "Contact area while sliding (seed Fig. 9)", "A / A0")
+                            "Contact area while sliding (seed Fig. 9)", "A / A0", logy=True)
 
 
 def figure_mu_eta(results):
@@ -327,7 +334,7 @@ def figure_mu_eta(results):
 
 def figure_area_eta(results):
     return _friction_figure(results, "sliding_contact_area_ratio", (0.0, 1.0, -1.0),
-                            "Contact area for correlated roughness (seed Fig. 11)", "A / A0")
+                            "Contact area for correlated roughness (seed Fig. 11)", "A / A0", logy=True)
 
 
 def figure_psds(results):
@@ -367,7 +374,7 @@ STAGE = register(
         name="friction",
         version="1",
         compute=compute_friction,
-        requires=("psd", "modulus"),
+        requires=("modulus", "psd"),  # modulus first: a bad master-curve file fails before anything is written
         params=("load.p", "material.nu", "friction.v", "friction.correction", "friction.gamma",
                 "numerics.friction_phi_nodes", "numerics.friction_segment_nodes"),
         outputs={

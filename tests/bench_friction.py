@@ -2,7 +2,7 @@
 
 The cases are those of the built-in ``friction`` scene: substrate only, and both rough with
 eta = 0, +1, -1. For each pair (q points per decade, Gauss-Legendre nodes in phi) the script
-times the friction stage's kernels (angular integrals + q integrals; the PSD and the modulus
+times (CPU time, best of 5, one BLAS thread) the friction stage's kernels (angular integrals + q integrals; the PSD and the modulus
 are computed once per q grid and not timed) and measures the largest relative error of mu
 and of A/A0 over all velocities and cases against a converged run (400 points per decade,
 256 phi nodes, 24 nodes per q segment). It also measures the error left by the modulus grid (numerics.
@@ -13,8 +13,12 @@ Run:  /work/venv/bin/python tests/bench_friction.py  [--quick]
 
 from __future__ import annotations
 
+import os
 import sys
 import time
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # one thread: CPU times comparable between runs
+os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 import numpy as np
 
@@ -61,14 +65,14 @@ def _dotted(values, key):
     return values[section] if not rest else (values[section] or {}).get(rest)
 
 
-def run_case(ppd: int, n_phi: int, v: np.ndarray, modulus_ppd: int = 20, repeat: int = 3, chunk: int = 0,
+def run_case(ppd: int, n_phi: int, v: np.ndarray, modulus_ppd: int = 20, repeat: int = 5, chunk: int = 0,
              segment_nodes: int = 12):
     """mu, A/A0 (4 cases, v), best time of ``repeat`` runs (s), number of q nodes."""
     q, C, grid, Ep, Epp, p, nu, _ = _inputs(ppd, modulus_ppd)
     best = np.inf
     chunk = chunk or v.size
     for _ in range(repeat):
-        t0 = time.perf_counter()
+        t0 = time.process_time()
         mus, areas = [], []
         for i in range(0, v.size, chunk):
             A, B = fr.angular_integrals(q, v[i:i + chunk], grid, Ep, Epp, n_phi)
@@ -76,7 +80,7 @@ def run_case(ppd: int, n_phi: int, v: np.ndarray, modulus_ppd: int = 20, repeat:
                                           segment_nodes=segment_nodes)
             mus.append(mu)
             areas.append(area)
-        best = min(best, time.perf_counter() - t0)
+        best = min(best, time.process_time() - t0)
     return np.concatenate(mus, axis=-1), np.concatenate(areas, axis=-1), best, q.size
 
 
@@ -88,7 +92,7 @@ def main(argv):
     print(f"reference: {REF[0]} points/decade ({n_ref} q nodes), {REF[1]} phi nodes: {t_ref:.2f} s")
     print(f"mu range {mu_ref.min():.3g} .. {mu_ref.max():.3g}; A/A0 range {area_ref.min():.3g} .. {area_ref.max():.3g}")
     print()
-    print("| q points/decade | q nodes | phi nodes | time (s) | max rel. error mu | max rel. error A/A0 |")
+    print("| q points/decade | q nodes | phi nodes | CPU time (s) | max rel. error mu | max rel. error A/A0 |")
     print("|---:|---:|---:|---:|---:|---:|")
     rows = []
     for ppd, n in pairs:
@@ -102,6 +106,13 @@ def main(argv):
         best = min(ok, key=lambda r: r[2])
         print(f"\ncheapest pair with error <= 1e-4 (mu and A/A0): {best[0]} points/decade, {best[1]} phi nodes, "
               f"{best[2]:.3f} s")
+    # error left by the number of Gauss-Legendre nodes per q segment of the mu integral
+    print("\n| nodes per q segment (40 points/decade, 16 phi nodes) | time (s) | max rel. error mu (vs 48 nodes) |")
+    print("|---:|---:|---:|")
+    mu48 = run_case(40, 16, v, repeat=1, segment_nodes=48)[0]
+    for m in (4, 6, 8, 12, 16):
+        mu, _, t, _ = run_case(40, 16, v, segment_nodes=m)
+        print(f"| {m} | {t:.3f} | {np.max(np.abs(mu / mu48 - 1)):.2e} |", flush=True)
     # error left by the modulus grid, at the reference q/phi resolution, against the analytic box
     print("\n| modulus points/decade | max rel. error of E' | of E'' | of mu (vs 80/decade) |")
     print("|---:|---:|---:|---:|")

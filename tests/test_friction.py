@@ -298,3 +298,21 @@ def test_missing_modulus_section_is_a_user_error(tmp_path):
     with pytest.raises(UserError) as err:
         _run(raw, tmp_path)
     assert err.value.key == "modulus"
+
+
+def test_time_temperature_superposition(tmp_path):
+    """With E(omega, T) = E(omega a_T, T_ref) (no vertical shift), eqs 61-62 give
+    mu(v, T) = mu(v a_T, T_ref) and the same for A/A0: a T sweep is a shifted v sweep."""
+    v = np.geomspace(1e-6, 1e-2, 5)
+    raw = _scene(**{"modulus.T": ["-40 degC", "0 degC"], "friction.v": [f"{float(x)!r} m/s" for x in v],
+                    "load.p": ["0.2 MPa", "0.4 MPa"]})
+    res = _run(raw, tmp_path / "a")
+    fric, mod = res["friction"], res["modulus"]
+    assert set(fric["friction_coefficient"].dims) == {"T", "p", "v"}
+    aT = float(mod["shift_factor"].isel(T=1))
+    raw_ref = _scene(**{"modulus.T": "-40 degC", "friction.v": [f"{float(x)!r} m/s" for x in v * aT],
+                        "load.p": ["0.2 MPa", "0.4 MPa"]})
+    ref = _run(raw_ref, tmp_path / "b")["friction"]
+    for name in ("friction_coefficient", "sliding_contact_area_ratio"):
+        hot = fric[name].isel(T=1).transpose("p", "v").values
+        np.testing.assert_allclose(hot, ref[name].transpose("p", "v").values, rtol=2e-5)
