@@ -591,8 +591,9 @@ def figure_modulus(results):
     ax.set_ylabel("modulus (Pa)")
     model = ds.attrs.get("model", "")
     ax.set_title(f"Viscoelastic modulus ({model}; cf. seed Fig. 7)")
-    lo = float(np.nanmin(ds["loss_modulus"].values[..., ds["loss_modulus"].values.shape[-1] // 2]))
-    ax.set_ylim(bottom=max(ax.get_ylim()[0], 1e-3 * lo if lo > 0 else ax.get_ylim()[0]))
+    top = float(np.nanmax(ds["loss_modulus"].values))
+    if top > 0:
+        ax.set_ylim(bottom=max(ax.get_ylim()[0], 1e-3 * top))
     ax.legend(fontsize=8)
     ax.grid(True, which="major", alpha=0.3)
     fig.tight_layout()
