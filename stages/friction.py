@@ -20,6 +20,8 @@ The nominal pressure sigma0 is the scene's ``load.p`` (a list is a sweep); Poiss
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import xarray as xr
 from scipy.special import erf
@@ -240,6 +242,10 @@ def compute_friction(inp: StageInput) -> xr.Dataset:
         if sweep.ndim == 0:
             ds = ds.assign_coords({sweep.name: sweep})
     needed_hi = float(q.values[-1] * np.max(v_values))
+    if needed_hi > grid[-1]:
+        warnings.warn(f"friction needs the modulus up to omega = q1 v_max = {needed_hi:.3g} rad/s, beyond the modulus "
+                      f"grid ({grid[-1]:.3g} rad/s): extrapolated with E' constant, E'' ~ 1/omega; "
+                      "raise modulus.omega_max if that is not the glassy plateau", UserWarning, stacklevel=2)
     ds.attrs = {
         "angular_quadrature": f"Gauss-Legendre, {n_phi} nodes on [0, pi/2]",
         "q_quadrature": ("G: piecewise power law on the psd stage's q grid; mu: in the variable G, "

@@ -334,3 +334,12 @@ def test_friction_density_integrates_to_mu(tmp_path):
     q = fric["q"].values
     total = integral(q, fric["friction_density"].transpose("v", "q").values / q)
     np.testing.assert_allclose(total, fric["friction_coefficient"].values, rtol=1e-5)
+
+
+def test_frequencies_beyond_the_modulus_grid_are_announced(tmp_path):
+    raw = _scene(**{"modulus.omega_max": "1e8 rad/s", "modulus.omega_min": "1e-6 rad/s",
+                    "friction.v": ["1e-3 m/s", "100 m/s"]})
+    with pytest.warns(UserWarning, match="beyond the modulus grid"):
+        fric = _run(raw, tmp_path)["friction"]
+    assert fric.attrs["modulus_extrapolated"].startswith("yes")
+    assert np.all(np.isfinite(fric["friction_coefficient"].values))
