@@ -1,0 +1,345 @@
+"""Tests of the friction stage (stages/friction.py): hysteretic friction mu(v) and A/A0(v).
+
+Every test asserts a physical or mathematical fact: the elastic limit, signs, the linear
+regime, monotonicity, the seed's orderings, an exact scaling, and agreement with an
+independent brute-force evaluation of eqs 61-62 by scipy.
+"""
+
+from __future__ import annotations
+
+import cmath
+import math
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from scipy.integrate import quad, solve_ivp
+from scipy.special import erf
+
+from pipeline import engine, scene as scenes
+from pipeline.errors import UserError
+from stages import friction as fr
+from stages import modulus as md
+from stages.contact import persson_G
+from stages.quadrature import log_grid
+
+QUIET = engine.Reporter(None)
+
+
+def _scene(**overrides):
+    """A small two-surface scene with a box-spectrum modulus (dict, TOML-like)."""
+    raw = {
+        "name": "t",
+        "substrate": {"kind": "self_affine", "H": 0.9, "qL": "1e4 1/m", "q1": "1e7 1/m", "hrms": "3 um"},
+        "solid": {"kind": "self_affine", "H": 0.8, "qL": "1e4 1/m", "q1": "1e7 1/m", "hrms": "4 um"},
+        "interface": {"eta": 0.0},
+        "material": {"E": "5 MPa", "nu": 0.5},
+        "load": {"p": "0.4 MPa"},
+        "modulus": {"kind": "box", "E0": "5 MPa", "E_inf": "3 GPa", "tau1": "1e-6 s", "tau2": "1e4 s",
+                    "T_ref": "-40 degC", "T": "20 degC", "shift": "wlf", "C2": "51.6 K"},
+        "friction": {"v": {"from": "1e-9 m/s", "to": "1e3 m/s", "num": 25}},
+        "outputs": {"variables": ["friction_coefficient"]},
+        "numerics": {"points_per_decade": 20, "friction_phi_nodes": 16},
+    }
+    for key, value in overrides.items():
+        section, _, name = key.partition(".")
+        if not name:
+            raw[section] = value
+        else:
+            raw.setdefault(section, {})[name] = value
+    return raw
+
+
+def _run(raw, tmp_path, variant="base"):
+    sc = scenes.from_dict(raw)
+    return engine.run(sc, tmp_path, report=QUIET)[variant]
+
+
+# ----------------------------------------------------------------------------------------
+# Elastic limit
+# ----------------------------------------------------------------------------------------
+
+
+def test_elastic_limit_gives_zero_friction_and_the_contact_stage_G(tmp_path):
+    """A real constant modulus: no hysteresis (mu = 0 exactly) and G(q; v) = G_contact(q)/sigma0^2
+    at every q and every v (eq 62 reduces to eq 17)."""
+    raw = _scene(**{"modulus": {"kind": "elastic", "E": "7 MPa"},
+                    "outputs.variables": ["friction_coefficient", "sliding_G"]})
+    res = _run(raw, tmp_path)
+    fric, psd = res["friction"], res["psd"]
+    assert np.all(fric["friction_coefficient"].values == 0.0)
+    q = psd["q"].values
+    E_star = 7e6 / (1 - 0.25)
+    G_contact = persson_G(q, psd["psd_combined"].values, q, E_star) / 0.4e6**2
+    G = fric["sliding_G"].transpose("v", "q").values
+    np.testing.assert_allclose(G, np.broadcast_to(G_contact, G.shape), rtol=1e-12)
+    area = fric["sliding_contact_area_ratio"].values
+    np.testing.assert_allclose(area, erf(1 / (2 * np.sqrt(G_contact[-1]))), rtol=1e-12)
+
+
+# ----------------------------------------------------------------------------------------
+# The built-in scene (seed section 4.3): signs, linear regime, monotonicity, orderings
+# ----------------------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def builtin(tmp_path_factory):
+    sc = scenes.load("friction")
+    results = engine.run(sc, tmp_path_factory.mktemp("friction"), report=QUIET)
+    return results
+
+
+def test_builtin_mu_nonnegative_finite_and_bounded(builtin):
+    for variant in ("base", "substrate_only"):
+        mu = builtin[variant]["friction"]["friction_coefficient"].values
+        area = builtin[variant]["friction"]["sliding_contact_area_ratio"].values
+        assert np.all(np.isfinite(mu)) and np.all(mu >= 0) and np.all(mu < 10)
+        assert np.all(np.isfinite(area)) and np.all((area > 0) & (area <= 1))
+
+
+def test_builtin_mu_proportional_to_v_at_low_v(builtin):
+    """Linear viscoelastic regime: E'' ~ omega and E' = E0 at omega = q v -> 0, so mu ~ v."""
+    fric = builtin["base"]["friction"]
+    low = fric.sel(v=slice(None, 1e-7))
+    ratio = (low["friction_coefficient"] / low["v"]).values
+    assert low["v"].size >= 3
+    np.testing.assert_allclose(ratio, np.broadcast_to(ratio[..., :1], ratio.shape), rtol=1e-6)
+
+
+def test_builtin_area_non_increasing_in_v(builtin):
+    for variant in ("base", "substrate_only"):
+        area = builtin[variant]["friction"]["sliding_contact_area_ratio"].transpose(..., "v").values
+        assert np.all(np.diff(area, axis=-1) <= 1e-12 * area[..., 1:])
+
+
+def test_builtin_orderings_at_every_velocity(builtin):
+    """Seed Figs 8 and 10: mu(eta=-1) > mu(eta=0) > mu(substrate only), mu(eta=0) > mu(eta=+1)."""
+    base = builtin["base"]["friction"]["friction_coefficient"]
+    only = builtin["substrate_only"]["friction"]["friction_coefficient"].values
+    m0, mp, mm = (base.sel(eta=e).values for e in (0.0, 1.0, -1.0))
+    assert np.all(mm > m0) and np.all(m0 > only) and np.all(m0 > mp)
+    # and the areas the other way round (seed Figs 9 and 11)
+    area = builtin["base"]["friction"]["sliding_contact_area_ratio"]
+    a_only = builtin["substrate_only"]["friction"]["sliding_contact_area_ratio"].values
+    a0, ap, am = (area.sel(eta=e).values for e in (0.0, 1.0, -1.0))
+    assert np.all(am < a0) and np.all(a0 < a_only) and np.all(a0 < ap)
+
+
+def test_builtin_has_one_broad_maximum(builtin):
+    """equations.md section 6: mu rises ~ v, has one maximum, then decreases."""
+    mu = builtin["base"]["friction"]["friction_coefficient"].sel(eta=0.0).values
+    i = int(np.argmax(mu))
+    assert 0 < i < mu.size - 1
+    assert np.all(np.diff(mu[: i + 1]) > 0) and np.all(np.diff(mu[i:]) < 0)
+
+
+# ----------------------------------------------------------------------------------------
+# Brute force: scipy over q and phi, analytic PSD and modulus
+# ----------------------------------------------------------------------------------------
+
+
+def _brute_force_mu(v, spec, psd_specs, sigma0, nu):
+    """mu and A/A0 from eqs 61-62 with no grid at all: quad over phi (adaptive, rtol 1e-11) for
+    the angular integrals of the analytic box modulus, and an adaptive ODE solver (DOP853,
+    rtol 1e-10) for the q integrals of G and mu together, in the variable x = sqrt(ln(q/q0))
+    (dq = 2 x q dx removes the integrable 1/sqrt(q - q0) of P(q) at q0)."""
+    T, T_ref, C1, C2 = spec["T"], spec["T_ref"], spec["C1"], spec["C2"]
+    aT = 10.0 ** (-C1 * (T - T_ref) / (C2 + T - T_ref))
+    E0, Ei, t1, t2 = spec["E0"], spec["E_inf"], spec["tau1"] * aT, spec["tau2"] * aT
+    D = (Ei - E0) / math.log(t2 / t1)
+
+    def E(w):
+        return E0 + D * (cmath.log(1 + 1j * w * t2) - cmath.log(1 + 1j * w * t1))
+
+    q0, q1 = psd_specs[0]["qL"], psd_specs[0]["q1"]
+
+    def C(q):
+        out = 0.0
+        for s in psd_specs:
+            H, h = s["H"], s["hrms"]
+            C0 = h * h * H / (math.pi * q0 * q0 * (1 - (q0 / q1) ** (2 * H)))
+            out += C0 * (q / q0) ** (-2 * (1 + H))
+        return out
+
+    k = 1.0 / ((1 - nu * nu) * sigma0)
+    opts = dict(epsabs=0.0, epsrel=1e-11, limit=400)
+
+    def rhs(x, y):
+        q = q0 * math.exp(x * x)
+        jac = 2 * x * q
+        A = quad(lambda p: abs(E(q * v * math.cos(p))) ** 2, 0, math.pi / 2, **opts)[0]
+        B = quad(lambda p: math.cos(p) * E(q * v * math.cos(p)).imag, 0, math.pi / 2, **opts)[0]
+        G = y[0]
+        P = math.erf(1 / (2 * math.sqrt(G))) if G > 0 else 1.0
+        c = q**3 * C(q) * jac
+        return [0.5 * k * k * c * A, 2 * k * c * P * B]
+
+    sol = solve_ivp(rhs, (0.0, math.sqrt(math.log(q1 / q0))), [0.0, 0.0], method="DOP853", rtol=1e-10, atol=1e-30)
+    G, mu = sol.y[:, -1]
+    return mu, math.erf(1 / (2 * math.sqrt(G)))
+
+
+@pytest.mark.parametrize("v", [1e-6, 3e-2, 30.0, 1e3])
+def test_agrees_with_brute_force_scipy(v):
+    """At default resolution the stage agrees with the brute-force evaluation to 1e-4."""
+    sc = scenes.load("friction")
+    spec = sc.values["modulus"]
+    surfaces = [sc.values["substrate"], sc.values["solid"]]
+    mu_bf, area_bf = _brute_force_mu(v, spec, surfaces, sc.values["load"]["p"], sc.values["material"]["nu"])
+    fric = _stage_at(sc, v)
+    assert fric[0] == pytest.approx(mu_bf, rel=1e-4)
+    assert fric[1] == pytest.approx(area_bf, rel=1e-4)
+
+
+def _stage_at(sc, v):
+    """mu, A/A0 of the built-in scene (eta = 0) at one velocity, through the stage's compute."""
+    from pipeline.stage import StageInput
+    from stages import psd as ps
+
+    values = sc.values
+    get = lambda key: values[key.partition(".")[0]] if "." not in key else values[key.partition(".")[0]][key.partition(".")[2]]  # noqa: E731
+    psd = ps.compute_psd(StageInput(params={k: get(k) for k in (
+        "substrate", "solid", "interface.eta", "grid.q_min", "grid.q_max", "numerics.points_per_decade")}))
+    mod = md.compute_modulus(StageInput(params={"modulus": values["modulus"],
+                                               "numerics.modulus_points_per_decade": values["numerics"]["modulus_points_per_decade"]}))
+    params = {k: get(k) for k in fr.STAGE.params}
+    params["friction.v"] = v
+    out = fr.compute_friction(StageInput(params=params, upstream={"psd": psd, "modulus": mod}))
+    sel = out.sel(eta=0.0)
+    return float(sel["friction_coefficient"]), float(sel["sliding_contact_area_ratio"])
+
+
+# ----------------------------------------------------------------------------------------
+# Kernels: properties over random inputs (hypothesis), exact scaling, options
+# ----------------------------------------------------------------------------------------
+
+
+def _kernel_case(H, hrms, p, E0, ratio, tau2, v, n_phi=12, ppd=10, eta=0.0, correction="none", gamma=0.5,
+                 decades=3.0, H2=None):
+    q = log_grid(1e4, 1e4 * 10.0**decades, ppd)
+    C1 = hrms**2 * H / (np.pi * 1e8) * (q / 1e4) ** (-2 * (1 + H))
+    C2 = C1 if H2 is None else hrms**2 * H2 / (np.pi * 1e8) * (q / 1e4) ** (-2 * (1 + H2))
+    C = (np.sqrt(C1) - eta * np.sqrt(C2)) ** 2 + (1 - eta * eta) * C2
+    grid = np.geomspace(1e-8, 1e22, 30 * 8 + 1)
+    Ep, Epp = md.box_spectrum_modulus(grid, E0, E0 * ratio, tau2 * 1e-10, tau2)
+    A, B = fr.angular_integrals(q, np.asarray(v), grid, Ep, Epp, n_phi)
+    return fr.friction_kernel(q, C, A, B, np.asarray(p), 0.5, correction, gamma)
+
+
+velocities = st.lists(st.floats(-9, 3), min_size=2, max_size=6, unique=True).map(lambda xs: 10.0 ** np.sort(xs))
+
+
+@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(H=st.floats(0.2, 1.0), H2=st.floats(0.2, 1.0), hrms=st.floats(1e-9, 1e-4), p=st.floats(1e-2, 1e10),
+       E0=st.floats(1e5, 1e8), ratio=st.floats(1.5, 1e4), tau2=st.floats(1e-12, 1e6), v=velocities,
+       eta=st.sampled_from([-1.0, -0.5, 0.0, 0.7, 1.0]), decades=st.floats(1.0, 7.0))
+def test_mu_finite_nonnegative_and_area_non_increasing(H, H2, hrms, p, E0, ratio, tau2, v, eta, decades):
+    """Extremes: pressures from 1e-2 Pa to 10 GPa, 1 to 7 decades of q, eta = +-1, different H,
+    v from 1e-9 to 1e3 m/s: finite, mu >= 0, 0 <= A/A0 <= 1 and non-increasing in v."""
+    mu, area = _kernel_case(H, hrms, p, E0, ratio, tau2, v, eta=eta, decades=decades, H2=H2)
+    assert np.all(np.isfinite(mu)) and np.all(mu >= 0)
+    assert np.all(np.isfinite(area)) and np.all((area >= 0) & (area <= 1))
+    assert np.all(np.diff(area) <= 1e-12)
+
+
+def test_identical_surfaces_fully_correlated_give_no_friction_and_full_contact():
+    """eta = +1 with C1 = C2: the combined PSD is exactly 0, no roughness: mu = 0, A/A0 = 1."""
+    mu, area = _kernel_case(0.8, 1e-6, 1e5, 1e6, 100.0, 1e-3, np.geomspace(1e-9, 1e3, 5), eta=1.0)
+    assert np.all(mu == 0.0) and np.all(area == 1.0)
+
+
+def test_scaling_modulus_and_pressure_together_leaves_mu_unchanged():
+    """eqs 61-62 depend on E and sigma0 only through E/sigma0."""
+    v = np.geomspace(1e-6, 1e2, 5)
+    mu1, a1 = _kernel_case(0.8, 2e-6, 3e5, 4e6, 500.0, 1e-4, v)
+    mu2, a2 = _kernel_case(0.8, 2e-6, 3e5 * 7.0, 4e6 * 7.0, 500.0, 1e-4, v)
+    np.testing.assert_allclose(mu2, mu1, rtol=1e-10)
+    np.testing.assert_allclose(a2, a1, rtol=1e-10)
+
+
+def test_yang_persson_factor_lowers_mu_and_gamma_one_is_the_plain_theory():
+    v = np.geomspace(1e-6, 1e2, 5)
+    plain, _ = _kernel_case(0.8, 2e-6, 3e5, 4e6, 500.0, 1e-4, v)
+    yp, _ = _kernel_case(0.8, 2e-6, 3e5, 4e6, 500.0, 1e-4, v, correction="yang_persson", gamma=0.5)
+    one, _ = _kernel_case(0.8, 2e-6, 3e5, 4e6, 500.0, 1e-4, v, correction="yang_persson", gamma=1.0)
+    assert np.all(yp < plain)
+    np.testing.assert_allclose(one, plain, rtol=1e-13)
+
+
+def test_angular_integrals_of_a_constant_modulus_are_exact():
+    """A = (pi/2) E^2 and B = 0 for E = const, for any number of nodes."""
+    q = np.geomspace(1e3, 1e6, 7)
+    grid = np.geomspace(1e-3, 1e12, 61)
+    E = np.full(grid.size, 3e6)
+    A, B = fr.angular_integrals(q, np.asarray([1e-3, 1.0]), grid, E, np.zeros(grid.size), 3)
+    np.testing.assert_allclose(A, np.pi / 2 * 9e12, rtol=1e-14)
+    assert np.all(B == 0)
+
+
+def test_dask_chunked_sweep_equals_unchunked(tmp_path):
+    raw = _scene(**{"interface.eta": [0.0, 1.0, -1.0]})
+    plain = _run(raw, tmp_path / "a")["friction"]
+    raw["numerics"]["chunks"] = {"v": 7, "eta": 1}
+    chunked = _run(raw, tmp_path / "b")["friction"]
+    np.testing.assert_allclose(chunked["friction_coefficient"].values, plain["friction_coefficient"].values, rtol=1e-14)
+
+
+# ----------------------------------------------------------------------------------------
+# Bad input
+# ----------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("v", ["0 m/s", "-1 m/s", ["1 m/s", "0 m/s"]])
+def test_nonpositive_velocity_is_a_user_error_naming_the_key(v):
+    with pytest.raises(UserError) as err:
+        scenes.from_dict(_scene(**{"friction.v": v}))
+    assert err.value.key == "friction.v" or err.value.key.startswith("friction.v")
+
+
+def test_missing_modulus_section_is_a_user_error(tmp_path):
+    raw = _scene()
+    del raw["modulus"]
+    with pytest.raises(UserError) as err:
+        _run(raw, tmp_path)
+    assert err.value.key == "modulus"
+
+
+def test_time_temperature_superposition(tmp_path):
+    """With E(omega, T) = E(omega a_T, T_ref) (no vertical shift), eqs 61-62 give
+    mu(v, T) = mu(v a_T, T_ref) and the same for A/A0: a T sweep is a shifted v sweep."""
+    v = np.geomspace(1e-6, 1e-2, 5)
+    raw = _scene(**{"modulus.T": ["-40 degC", "0 degC"], "friction.v": [f"{float(x)!r} m/s" for x in v],
+                    "load.p": ["0.2 MPa", "0.4 MPa"]})
+    res = _run(raw, tmp_path / "a")
+    fric, mod = res["friction"], res["modulus"]
+    assert set(fric["friction_coefficient"].dims) == {"T", "p", "v"}
+    aT = float(mod["shift_factor"].isel(T=1))
+    raw_ref = _scene(**{"modulus.T": "-40 degC", "friction.v": [f"{float(x)!r} m/s" for x in v * aT],
+                        "load.p": ["0.2 MPa", "0.4 MPa"]})
+    ref = _run(raw_ref, tmp_path / "b")["friction"]
+    for name in ("friction_coefficient", "sliding_contact_area_ratio"):
+        hot = fric[name].isel(T=1).transpose("p", "v").values
+        np.testing.assert_allclose(hot, ref[name].transpose("p", "v").values, rtol=2e-5)
+
+
+def test_friction_density_integrates_to_mu(tmp_path):
+    """d mu / d ln q integrated over ln q gives mu (two second-order quadratures of the same integral,
+    in q and in G, at 20 points per decade: agreement to 1e-5)."""
+    from stages.quadrature import integral
+
+    raw = _scene(**{"friction.v": {"from": "1e-9 m/s", "to": "1e-6 m/s", "num": 4},
+                    "outputs.variables": ["friction_coefficient", "friction_density"]})
+    fric = _run(raw, tmp_path)["friction"]
+    q = fric["q"].values
+    total = integral(q, fric["friction_density"].transpose("v", "q").values / q)
+    np.testing.assert_allclose(total, fric["friction_coefficient"].values, rtol=1e-5)
+
+
+def test_frequencies_beyond_the_modulus_grid_are_announced(tmp_path):
+    raw = _scene(**{"modulus.omega_max": "1e8 rad/s", "modulus.omega_min": "1e-6 rad/s",
+                    "friction.v": ["1e-3 m/s", "100 m/s"]})
+    with pytest.warns(UserWarning, match="beyond the modulus grid"):
+        fric = _run(raw, tmp_path)["friction"]
+    assert fric.attrs["modulus_extrapolated"].startswith("yes")
+    assert np.all(np.isfinite(fric["friction_coefficient"].values))
