@@ -18,6 +18,7 @@ import xarray as xr
 from . import store
 from .errors import UserError
 from .readers import READERS
+from .schema import MISSING
 from .scene import Scene
 from .stage import Stage, StageInput, producer_of, stages
 
@@ -93,6 +94,9 @@ def plan(scene: Scene, outdir: Path, targets: Iterable[str] | None = None, force
 
 def _plan_stage(scene, variant, st, outdir, keys, targets, force) -> StagePlan:
     params = {name: scene.get(name) for name in st.params}
+    absent = [name for name, value in params.items() if value is MISSING]
+    if absent:
+        raise UserError(f"missing required key (stage {st.name} needs it)", key=absent[0])
     file_paths, inputs = {}, []
     for f in st.files:
         value = _dotted(scene, f.param)

@@ -20,6 +20,16 @@ from .units import to_si
 
 REQUIRED = object()
 
+
+class _Missing:
+    """A required key the scene does not give; fine unless a needed stage reads it."""
+
+    def __repr__(self) -> str:
+        return "<missing>"
+
+
+MISSING = _Missing()
+
 #: Parameter kinds:
 #:   quantity  one number with units (``units`` is the SI target)
 #:   sweep     a quantity, or a list / range of them (a list becomes a sweep dimension)
@@ -256,9 +266,11 @@ class Section:
             elif p.default is not REQUIRED:
                 out[name] = p.value_in(preset)
         missing = [n for n, p in params.items() if n not in out]
-        if missing:
+        if missing and self.discriminator is not None:
             raise UserError(f"missing required key(s): {', '.join(missing)}", key=key)
-        if self.check is not None:
+        for name in missing:  # an error only if a stage the scene needs reads it (engine.plan)
+            out[name] = MISSING
+        if self.check is not None and not missing:
             self.check(out, key)
         return out
 

@@ -79,3 +79,14 @@ def test_psd_file_errors(tmp_path, capsys, write_scene, label, text, where, expe
                                   grid={"q_min": "1e8 1/m", "q_max": "1e10 1/m"}))
     err = _run(tmp_path, capsys, path)
     assert str(data) in err and where in err and expected in err
+
+
+def test_required_key_is_needed_only_by_stages_that_read_it(tmp_path, capsys, write_scene):
+    # no [material] E: fine for a scene that asks only for the PSD, an error naming the key otherwise
+    raw = make_scene(material={"nu": 0.42}, outputs={"variables": ["psd_combined"]})
+    raw["material"] = {"nu": 0.42}
+    path = write_scene(raw)
+    assert main(["run", str(path), "--outdir", str(tmp_path / "ok"), "--quiet"]) == 0
+    raw["outputs"] = {"variables": ["contact_area_ratio"]}
+    err = _run(tmp_path, capsys, write_scene(raw, "needs_e.toml"))
+    assert "material.E: missing required key (stage contact needs it)" in err
