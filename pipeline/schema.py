@@ -33,10 +33,11 @@ MISSING = _Missing()
 #: Parameter kinds:
 #:   quantity  one number with units (``units`` is the SI target)
 #:   sweep     a quantity, or a list / range of them (a list becomes a sweep dimension)
+#:   quantities  a quantity or a list of them that is data, not a sweep (e.g. Prony terms)
 #:   int, bool, str, choice, path (a file, resolved against the scene's folder)
 #:   paths     one or more files (a string or a list of strings), each resolved like ``path``
 #:   list      a list of strings; intlist: a list of whole numbers
-KINDS = ("quantity", "sweep", "int", "bool", "str", "choice", "path", "paths", "list", "intlist")
+KINDS = ("quantity", "sweep", "quantities", "int", "bool", "str", "choice", "path", "paths", "list", "intlist")
 
 
 @dataclass(frozen=True)
@@ -97,7 +98,7 @@ class Param:
         k = self.kind
         if k == "quantity":
             return self._bounded(to_si(raw, self.units, key=key), key)
-        if k == "sweep":
+        if k in ("sweep", "quantities"):
             if isinstance(raw, str) and raw in self.choices:
                 return raw
             values = parse_sweep(raw, self.units, key)

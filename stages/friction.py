@@ -181,8 +181,10 @@ register_section(
 )
 register_params(
     "numerics",
-    Param("friction_phi_nodes", "int", default=16, lo=2, doc="Gauss-Legendre nodes of the friction angular integrals"),
-    Param("friction_segment_nodes", "int", default=12, lo=2,
+    Param("friction_phi_nodes", "int", default=16, lo=2, presets={"fast": 8, "accurate": 24},
+          ladder=(6, 8, 10, 12, 16, 20, 24, 32, 64), doc="Gauss-Legendre nodes of the friction angular integrals"),
+    Param("friction_segment_nodes", "int", default=12, lo=2, presets={"fast": 6, "accurate": 16},
+          ladder=(4, 4, 6, 8, 12, 12, 16, 16, 24),
           doc="Gauss-Legendre nodes per q segment of the friction integral (integrated in the variable G)"),
 )
 
@@ -381,6 +383,8 @@ STAGE = register(
         version="1",
         compute=compute_friction,
         requires=("modulus", "psd"),  # modulus first: a bad master-curve file fails before anything is written
+        main_outputs=("friction_coefficient", "sliding_contact_area_ratio"),
+        tolerance=1e-4,
         params=("load.p", "material.nu", "friction.v", "friction.correction", "friction.gamma",
                 "numerics.friction_phi_nodes", "numerics.friction_segment_nodes"),
         outputs={

@@ -262,11 +262,11 @@ _COMMON = (
     Param("C1", "quantity", "", default=17.44, lo=0.0, lo_open=True, doc="WLF C1 (universal 17.44 about Tg)"),
     Param("C2", "quantity", "K", default=51.6, lo=0.0, lo_open=True,
           doc="WLF C2, a temperature difference in K (universal 51.6 K about Tg)"),
-    Param("shift_T", "sweep", "K", default=None, lo=0.0, lo_open=True, doc="shift table: temperatures"),
-    Param("shift_log10_aT", "sweep", "", default=None, doc="shift table: log10 a_T at shift_T"),
+    Param("shift_T", "quantities", "K", default=None, lo=0.0, lo_open=True, doc="shift table: temperatures"),
+    Param("shift_log10_aT", "quantities", "", default=None, doc="shift table: log10 a_T at shift_T"),
     Param("vertical_shift", "choice", default="none", choices=("none", "entropic", "table"),
           doc="vertical shift b_T: none (1), entropic (T / T_ref) or the table's shift_log10_bT"),
-    Param("shift_log10_bT", "sweep", "", default=None, doc="shift table: log10 b_T at shift_T"),
+    Param("shift_log10_bT", "quantities", "", default=None, doc="shift table: log10 b_T at shift_T"),
     Param("omega_min", "quantity", "rad/s", default=None, lo=0.0, lo_open=True,
           doc="lowest angular frequency of the stored grid (default: covers the spectrum at every T)"),
     Param("omega_max", "quantity", "rad/s", default=None, lo=0.0, lo_open=True,
@@ -281,8 +281,8 @@ _BOX = (
 )
 _PRONY = (
     Param("E0", "quantity", "Pa", lo=0.0, lo_open=True, doc="equilibrium (relaxed) Young's modulus"),
-    Param("prony_E", "sweep", "Pa", lo=0.0, lo_open=True, doc="list of Prony moduli E_k"),
-    Param("prony_tau", "sweep", "s", lo=0.0, lo_open=True, doc="list of relaxation times tau_k (at T_ref)"),
+    Param("prony_E", "quantities", "Pa", lo=0.0, lo_open=True, doc="list of Prony moduli E_k"),
+    Param("prony_tau", "quantities", "s", lo=0.0, lo_open=True, doc="list of relaxation times tau_k (at T_ref)"),
 )
 _ELASTIC = (Param("E", "quantity", "Pa", lo=0.0, lo_open=True, doc="real, frequency-independent Young's modulus"),)
 _FILE = (
@@ -350,7 +350,8 @@ register_section(
 )
 register_params(
     "numerics",
-    Param("modulus_points_per_decade", "int", default=20, lo=4,
+    Param("modulus_points_per_decade", "int", default=20, lo=4, presets={"fast": 10, "accurate": 40},
+          ladder=(8, 10, 12, 16, 20, 24, 30, 40, 60),
           doc="points per decade of the stored E(omega) grid (cubic log-log interpolation between them)"),
 )
 
