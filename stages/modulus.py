@@ -383,7 +383,20 @@ def _shift_factors(spec, T: np.ndarray) -> tuple[np.ndarray, np.ndarray, str]:
     else:
         b_T = np.ones_like(T)
         how += "; no vertical shift (b_T = 1)"
+    log_aT = np.asarray(log_aT, dtype=float)
+    if np.any(~np.isfinite(log_aT)) or np.any(np.abs(log_aT) > MAX_LOG10_SHIFT):
+        worst = int(np.argmax(np.where(np.isfinite(log_aT), np.abs(log_aT), np.inf)))
+        raise UserError(
+            f"the temperature shift at T = {np.atleast_1d(T)[worst]:.6g} K is a_T = 10^{log_aT.flat[worst]:.4g}, beyond "
+            f"10^+-{MAX_LOG10_SHIFT}: relaxation times that large or small are outside the shift law's validity "
+            f"(for WLF, T is too close to T_ref - C2 = {T_ref - spec['C2']:.6g} K); use temperatures nearer T_ref",
+            key="modulus.T")
     return 10.0 ** log_aT, b_T, how
+
+
+#: largest |log10 a_T| accepted: beyond it (relaxation times shifted by more than 100 decades)
+#: no shift law is physical, and the frequency grid would leave floating-point range
+MAX_LOG10_SHIFT = 100
 
 
 def _frequency_factor(unit: str, mode: str) -> float:
