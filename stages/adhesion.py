@@ -716,10 +716,17 @@ def _curve(ax_a, ax_b, ds, label, style, full=False, color=None):
         raise UserError("the adhesion figures need substrate.hrms as a sweep", key="substrate.hrms")
     h = ds["hrms_substrate"].values / _ANGSTROM
     dg = float(ds["delta_gamma"])
-    (line,) = ax_a.plot(h, ds["gamma_eff_macroscopic"].values / dg, style, color=color, label=label, markersize=4)
-    ax_b.plot(h, ds["adhesive_contact_area_ratio"].values, style, color=line.get_color(), label=label, markersize=4)
+    g = ds["gamma_eff_macroscopic"].values / dg
+    A = ds["adhesive_contact_area_ratio"].values
+    hp, gp, Ap = h, g, A
+    if "hrms_substrate_vanishing" in ds:  # the end of the attached branch, where both reach 0
+        hv = float(ds["hrms_substrate_vanishing"]) / _ANGSTROM
+        order = np.argsort(np.append(h, hv), kind="stable")
+        hp, gp, Ap = np.append(h, hv)[order], np.append(g, 0.0)[order], np.append(A, 0.0)[order]
+    (line,) = ax_a.plot(hp, gp, style, color=color, label=label, markersize=4, markevery=list(np.flatnonzero(np.isin(hp, h))))
+    ax_b.plot(hp, Ap, style, color=line.get_color(), label=label, markersize=4, markevery=list(np.flatnonzero(np.isin(hp, h))))
     if full:
-        ax_a.plot(h, ds["gamma_eff_full_contact"].values / dg, "-.", color=line.get_color(), label=f"{label} full contact".strip())
+        ax_a.plot(h, ds["gamma_eff_full_contact"].values / dg, "-.", color=line.get_color(), label="full contact")
     if "hrms_substrate_vanishing" in ds:
         hv = float(ds["hrms_substrate_vanishing"]) / _ANGSTROM
         for ax in (ax_a, ax_b):
