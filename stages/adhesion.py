@@ -210,6 +210,9 @@ def march(zeta, a, wel, F, K, sigma0=0.0, c0=1.0, c1=0.0, sigma_fixed=None, node
     N[:, 0] = K
     sig[:, 0] = np.sqrt(np.maximum(K, 0.0) * zeta[0]) if sigma_fixed is None else sigma_fixed[:, 0]
     worst = np.zeros(B)
+    # sigma_a(1) + sigma0 = 0: nothing holds the surfaces together at the largest scale, eq 9
+    # gives P = erf(0) = 0 at once (left to the march, the jump would be smeared over a segment)
+    instant = sig[:, 0] + sigma0 <= 0
 
     def el(p):
         return p * (c0 + c1 * p * p)
@@ -222,7 +225,7 @@ def march(zeta, a, wel, F, K, sigma0=0.0, c0=1.0, c1=0.0, sigma_fixed=None, node
         okj = dj > 0
         dj4 = 4.0 * np.where(okj, dj, 1.0)
         Pprev = P[:, i - 1]
-        live = Pprev > 0
+        live = (Pprev > 0) & ~instant
         sprev = s[:, i - 1]
         Ws = W[:, :i] * s[:, :i]
         Wii = W[:, i]
