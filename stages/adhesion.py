@@ -537,8 +537,8 @@ def _where(labels, names, bad) -> str:
 
 
 def _partial_kernel(C, c0, c1, *labels, q, E_star, delta_gamma, sigma0, zeta, K_min, tol, names):
-    shape = C.shape[:-1]
-    Cf = C.reshape(-1, C.shape[-1])
+    shape = np.broadcast_shapes(C.shape[:-1], np.shape(c0), np.shape(c1), *(np.shape(v) for v in labels))
+    Cf = np.broadcast_to(C, shape + C.shape[-1:]).reshape(-1, C.shape[-1])
     c0f = np.broadcast_to(c0, shape).reshape(-1)
     c1f = np.broadcast_to(c1, shape).reshape(-1)
     prob = _Problem(q, Cf, E_star, delta_gamma, zeta)
@@ -568,7 +568,8 @@ def _partial_kernel(C, c0, c1, *labels, q, E_star, delta_gamma, sigma0, zeta, K_
 
 def _vanishing_kernel(K, C1, C2, eta, c0, c1, *, hs, q, E_star, delta_gamma, zeta, K_min, tol):
     """Per case (leading dims), the substrate hrms where the attached branch ends."""
-    shape = K.shape[:-1]
+    shape = np.broadcast_shapes(K.shape[:-1], C1.shape[:-2], C2.shape[:-1], np.shape(eta), np.shape(c0), np.shape(c1))
+    K = np.broadcast_to(K, shape + K.shape[-1:])
     n = hs.size
     Kf = K.reshape(-1, n)
     B = Kf.shape[0]
@@ -641,6 +642,8 @@ def compute_adhesion(inp: StageInput) -> xr.Dataset:
     zeta = xr.DataArray(zeta_values, dims=("zeta",),
                         attrs={"units": "1", "long_name": "magnification zeta = q/qL (Volterra grid of eq 9)"})
     g1, P, g, sa, full, F = (r.assign_coords(zeta=zeta) if "zeta" in r.dims else r for r in results)
+    if "model" in full.dims:  # the full-contact theory and F do not depend on the S_el model
+        full, F = full.isel(model=0, drop=True), F.isel(model=0, drop=True)
     load = "zero load" if sigma0 == 0 else f"nominal stress sigma0 = {sigma0:g} Pa"
     g1.attrs = {"units": "J/m^2", "long_name": f"effective interfacial energy gamma_eff at the lowest magnification, "
                 f"partial-contact theory, {load} (eqs 9, 13)"}

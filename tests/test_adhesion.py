@@ -261,3 +261,21 @@ def test_sweep_never_detaching_is_a_user_error(tmp_path):
 def test_vanishing_needs_a_sweep(tmp_path):
     with pytest.raises(UserError, match="sweep"):
         _run(_raw("10 angstrom"), tmp_path)
+
+
+def test_stage_models_and_pairs(tmp_path):
+    """Per model and per eta: S_el(yang_persson) = 0.45 + 0.55 P^2 <= 1 = S_el(alpha = 1) stores less
+    elastic energy, so adhesion survives to a larger roughness; the pair rule holds per model."""
+    raw = _raw(["5 angstrom", "12 angstrom", "17 angstrom", "20 angstrom", "30 angstrom"],
+               {"model": ["alpha", "yang_persson"]},
+               solid={"kind": "self_affine", "H": 0.8, "qL": "7e6 1/m", "q1": "1.4e9 1/m", "hrms": "3 angstrom"},
+               eta=[0.0, -1.0])
+    ds = _run(raw, tmp_path)
+    hv = ds["hrms_substrate_vanishing"]
+    assert set(hv.dims) == {"eta", "model"}
+    assert np.all(hv.sel(model="yang_persson") > hv.sel(model="alpha"))
+    h2 = 3e-10
+    one_from_eta0 = np.sqrt(hv.sel(eta=0.0) ** 2 + h2**2)
+    one_from_anti = hv.sel(eta=-1.0) + h2
+    assert np.allclose(one_from_eta0, one_from_anti, rtol=1e-3)
+    assert "model" not in ds["gamma_eff_full_contact"].dims
