@@ -690,15 +690,20 @@ def _vanishing(ds, psd, c0, c1, q, E_star, dg, zeta_values, K_min, tol, sigma0):
         output_core_dims=[[], []], output_dtypes=[float, int],
         kwargs=dict(hs=hs[order], q=q, E_star=E_star, delta_gamma=dg, zeta=zeta_values, K_min=K_min, tol=tol),
     )
-    if np.any(status.values != 0):
-        bad = status.where(status != 0, drop=True)
-        first = {d: bad[d].values[0] for d in bad.dims}
-        kind = int(np.ravel(status.values)[np.flatnonzero(np.ravel(status.values))[0]])
+    flat = np.ravel(status.values)
+    if np.any(flat != 0):
+        first = int(np.flatnonzero(flat)[0])
+        index = np.unravel_index(first, status.shape) if status.ndim else ()
+        where = ", ".join(f"{d} = {status[d].values[i]:g}" if status[d].dtype.kind == "f" else f"{d} = {status[d].values[i]}"
+                          for d, i in zip(status.dims, index) if d in status.coords)
+        more = int(np.count_nonzero(flat)) - 1
         why = (f"still attached at the largest swept substrate hrms {hs.max() * 1e10:.4g} angstrom: extend the sweep"
-               if kind == 1 else
+               if flat[first] == 1 else
                f"already detached at the smallest swept substrate hrms {hs.min() * 1e10:.4g} angstrom: start the sweep lower")
-        raise UserError(f"cannot find the hrms at which adhesion vanishes{' at ' + str(first) if first else ''}: "
-                        f"the partial-contact solution is {why}", key="adhesion.vanishing_hrms")
+        at = f" at {where}" if where else ""
+        also = f" (and {more} more case(s))" if more else ""
+        raise UserError(f"cannot find the hrms at which adhesion vanishes{at}{also}: the partial-contact solution is {why}",
+                        key="adhesion.vanishing_hrms")
     h.attrs = {"units": "m", "long_name": "substrate rms roughness at which adhesion vanishes (gamma_eff(1) and A/A0 "
                "reach 0 together; root along the attached branch, zero load)"}
     return h

@@ -176,12 +176,16 @@ def test_vanishing_hrms_grid_convergence():
 
 # --- extremes (hypothesis) ----------------------------------------------------------------
 
-@settings(max_examples=12, deadline=None)
-@given(Hx=st.floats(0.05, 1.0), log_h=st.floats(-13.0, -7.0), log_dg=st.floats(-3.0, 1.0))
-def test_extremes_are_finite_and_bounded(Hx, log_h, log_dg):
+@settings(max_examples=15, deadline=None)
+@given(Hx=st.floats(0.05, 1.0), log_h=st.floats(-13.0, -7.0), log_dg=st.floats(-3.0, 1.0),
+       eta=st.sampled_from([-1.0, 0.0, 1.0, 0.37]), ratio=st.sampled_from([0.0, 0.5, 1.0, 3.0]))
+def test_extremes_are_finite_and_bounded(Hx, log_h, log_dg, eta, ratio):
+    """Tiny to huge roughness and binding energy, H -> 0 and 1, eta = -1..1, identical surfaces
+    (eta = 1, ratio 1: combined PSD exactly 0): finite, 0 <= P <= 1, 0 <= gamma_eff(1) <= F Delta_gamma."""
     q0, q1 = 1e6, 1e9
     q = log_grid(q0, q1, 8)
-    C = (10**log_h) ** 2 * self_affine_psd(q, Hx, q0, q0, q1, 1.0) / self_affine_hrms_factor(Hx, q0, q0, q1)
+    unit = self_affine_psd(q, Hx, q0, q0, q1, 1.0) / self_affine_hrms_factor(Hx, q0, q0, q1)
+    C = psd_combined((10**log_h) ** 2 * unit, (ratio * 10**log_h) ** 2 * unit, eta)
     prob = _Problem(q, C[None, :], E_STAR, 10**log_dg, zeta_grid(q1 / q0, 4, 1e-10))
     sol = solve_partial_contact(prob, 0.0, np.ones(1), np.zeros(1))
     assert np.all(np.isfinite(sol["P"])) and np.all((sol["P"] >= 0) & (sol["P"] <= 1))
@@ -279,3 +283,17 @@ def test_stage_models_and_pairs(tmp_path):
     one_from_anti = hv.sel(eta=-1.0) + h2
     assert np.allclose(one_from_eta0, one_from_anti, rtol=1e-3)
     assert "model" not in ds["gamma_eff_full_contact"].dims
+
+
+def test_non_convergence_in_the_stage_names_the_sweep_point(tmp_path, monkeypatch):
+    import stages.adhesion as mod
+
+    def failing(prob, sigma0, c0, c1, **kw):
+        err = ComputationError("self-consistent gamma_eff: no convergence in 80 iterations; largest residual 0.25")
+        err.failed = np.arange(prob.a.shape[0]) == 1
+        raise err
+
+    monkeypatch.setattr(mod, "solve_partial_contact", failing)
+    with pytest.raises(ComputationError, match=r"hrms_substrate=1\.5e-09.*residual 0\.25"):
+        _run(_raw(["10 angstrom", "15 angstrom"], {"vanishing_hrms": False}), tmp_path)
+    assert not (tmp_path / "adhesion.nc").exists()
