@@ -124,6 +124,36 @@ def zeta_grid(zeta1, points_per_decade, zeta_offset):
     return np.concatenate([[1.0], 1.0 + top * np.logspace(-decades, 0.0, n + 1)])
 
 
+def layer_resolving_offset(q, C, E_star, delta_gamma, offset, K_min, sigma0=0.0, margin=1e-3):
+    """Smallest zeta - 1 of the Volterra grid that resolves the detachment layer at zeta -> 1.
+
+    Detachment starts where a(zeta) ~ (sigma_a(1) + sigma0)^2; on the attached branch
+    sigma_a(1)^2 >= K_min F Delta_gamma E* qL. The first grid cell must be much thinner:
+    a(1 + offset) <= margin (sigma_a,min + sigma0)^2 for every PSD of the batch. Returns
+    ``offset`` if it already does, else the (smaller) offset that does (a ~ zeta - 1 there).
+
+    Parameters
+    ----------
+    q : array (n,)
+    C : array (B, n)
+        Combined PSDs (m^4).
+    E_star, delta_gamma, sigma0 : float
+        Pa, J/m^2, Pa.
+    offset, K_min : float
+        The requested smallest zeta - 1, and the smallest gamma_eff(1)/(F Delta_gamma) solved for.
+    """
+    C = np.atleast_2d(np.asarray(C, dtype=float))
+    qL = float(q[0])
+    F = surface_area_factor(rms_slope_from_psd(q, C))
+    sigma_min = np.sqrt(K_min * float(np.min(F)) * delta_gamma * E_star * qL) + sigma0
+    target = margin * sigma_min**2
+    G1 = 0.25 * np.pi * E_star**2 * integral_to(q, q**3 * C, np.array([qL * (1.0 + offset)]))[:, 0]
+    worst = float(np.max(G1))
+    if worst <= target:
+        return offset
+    return offset * target / worst
+
+
 def abel_weights(a, i):
     """Product-trapezoid weights of the Abel kernel at node i.
 
@@ -247,7 +277,9 @@ def march(zeta, a, wel, F, K, sigma0=0.0, c0=1.0, c1=0.0, sigma_fixed=None, node
                 E = np.where(okj, np.exp(-((sgf[:, None] - sig[:, :i]) ** 2) / dj4), 0.0)
                 lhs = np.where((ai > 0) & fin, np.exp(-((sgf + sigma0) ** 2) / ai4), 0.0)
             known = np.sum(Ws * E, axis=1)
-            si = np.where(grows, np.maximum(lhs - known, 0.0) / Wsafe, 0.0)
+            # where a does not grow (no roughness on this segment) nothing detaches; s keeps its
+            # value so that its piecewise-linear interpolant is not broken at the repeated node
+            si = np.where(grows, np.maximum(lhs - known, 0.0) / Wsafe, np.where(da > 0, 0.0, sprev))
             Pn = np.maximum(Pprev - 0.5 * (sprev + si) * da, 0.0)
             return Pn, si, Ni, sgf
 
@@ -613,6 +645,8 @@ def compute_adhesion(inp: StageInput) -> xr.Dataset:
     sigma0 = spec["sigma0"]
     ppd, offset = inp["numerics.adhesion_points_per_decade"], inp["numerics.adhesion_zeta_offset"]
     K_min, tol = inp["numerics.adhesion_K_min"], inp["numerics.adhesion_tolerance"]
+    C_all = psd["psd_combined"].values.reshape(-1, q.size)
+    offset = layer_resolving_offset(q, C_all, E_star, dg, offset, K_min, sigma0)
     zeta_values = zeta_grid(q[-1] / q[0], ppd, offset)
     models = tuple(spec["model"])
     coefs = [_COEFS[m](spec["alpha"], spec["gamma"]) for m in models]

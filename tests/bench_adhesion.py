@@ -20,7 +20,9 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from stages.adhesion import _Problem, effective_modulus, solve_partial_contact, vanishing_scale, zeta_grid  # noqa: E402
+from stages.adhesion import (  # noqa: E402
+    _Problem, effective_modulus, layer_resolving_offset, solve_partial_contact, vanishing_scale, zeta_grid,
+)
 from stages.psd import psd_combined, self_affine_hrms_factor, self_affine_psd  # noqa: E402
 from stages.quadrature import log_grid  # noqa: E402
 
@@ -39,7 +41,9 @@ def setup(q_ppd):
 
 def curve(hs, ppd, offset, K_min, q_ppd):
     q, shape = setup(q_ppd)
-    prob = _Problem(q, hs[:, None] ** 2 * shape, E_STAR, DG, zeta_grid(Q1 / Q0, ppd, offset))
+    C = hs[:, None] ** 2 * shape
+    offset = layer_resolving_offset(q, C, E_STAR, DG, offset, K_min)  # as the stage does
+    prob = _Problem(q, C, E_STAR, DG, zeta_grid(Q1 / Q0, ppd, offset))
     t0 = time.perf_counter()
     sol = solve_partial_contact(prob, 0.0, np.ones(hs.size), np.zeros(hs.size), K_min=K_min)
     return time.perf_counter() - t0, sol["K"], sol["P"][:, -1]
@@ -48,6 +52,7 @@ def curve(hs, ppd, offset, K_min, q_ppd):
 def h_star(ppd, offset, K_min, q_ppd, h2=0.0, eta=0.0, lo=5 * ANG, hi=40 * ANG):
     q, shape = setup(q_ppd)
     C2 = shape * h2**2
+    offset = layer_resolving_offset(q, psd_combined(hi**2 * shape, C2, eta)[None, :], E_STAR, DG, offset, K_min)
     t0 = time.perf_counter()
     h = vanishing_scale(lambda h: psd_combined(h[:, None] ** 2 * shape, C2, eta), q, E_STAR, DG,
                         zeta_grid(Q1 / Q0, ppd, offset), np.array([lo]), np.array([hi]), np.ones(1), np.zeros(1),
@@ -84,7 +89,7 @@ def main():
         n = zeta_grid(Q1 / Q0, ppd, CONVERGED["offset"]).size
         print(f"{ppd:5d} {n:6d} {h / ANG:12.6f} {err:11.2e} {order} {t:9.2f}")
         prev = err
-    print("\n== smallest zeta - 1 of the grid (ppd 10)")
+    print("\n== requested smallest zeta - 1 of the grid (ppd 10; reduced further when the layer needs it)")
     for off in (1e-6, 1e-8, 1e-10, 1e-12):
         t, h = h_star(10, off, CONVERGED["K_min"], CONVERGED["q_ppd"])
         print(f"offset {off:8.0e}: h* = {h / ANG:.6f} A")

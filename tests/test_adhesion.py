@@ -4,14 +4,14 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import given, settings, strategies as st
+from hypothesis import assume, given, settings, strategies as st
 from scipy.integrate import quad
 from scipy.special import erf
 
 from pipeline import engine, scene as scenes
 from pipeline.errors import ComputationError, UserError
 from stages.adhesion import (
-    _Problem, adhesion_length, detachment_volterra, effective_modulus, gamma_eff_full_contact, solve_partial_contact,
+    _Problem, adhesion_length, detachment_volterra, layer_resolving_offset, effective_modulus, gamma_eff_full_contact, solve_partial_contact,
     surface_area_factor, vanishing_scale, zeta_grid,
 )
 from stages.psd import psd_combined, self_affine_hrms_factor, self_affine_psd
@@ -50,6 +50,16 @@ def test_volterra_constant_sigma_a_gives_erf(sigma_a, sigma0):
     assert np.max(np.abs(P - exact)) < 1e-3
 
 
+def test_volterra_with_a_plateau_in_a():
+    """No roughness over a band of zeta (a constant there): nothing detaches on it and the exact
+    solution is still erf(sigma_a / (2 sqrt a)), a function of a alone."""
+    zeta = zeta_grid(200.0, 10, 1e-8)
+    a = np.where(zeta < 3, zeta - 1, np.where(zeta < 10, 2.0, 0.2 * zeta))[None, :]
+    P = detachment_volterra(a, np.full_like(a, 1.5))
+    exact = erf(1.5 / (2.0 * np.sqrt(a[:, 1:])))
+    assert np.max(np.abs(P[:, 1:] - exact)) < 1e-3
+
+
 def test_volterra_converges_at_second_order():
     errs = []
     for ppd in (5, 10, 20):
@@ -59,6 +69,16 @@ def test_volterra_converges_at_second_order():
         errs.append(np.max(np.abs(P - erf(0.3 / (2 * np.sqrt(np.maximum(a, 1e-300)))))))
     orders = np.log2(np.array(errs[:-1]) / np.array(errs[1:]))
     assert np.all(orders > 1.8), orders
+
+
+def test_layer_resolving_offset():
+    """The grid offset is kept when it resolves the layer and reduced (proportionally) when not."""
+    assert layer_resolving_offset(Q, (5 * ANG) ** 2 * SHAPE[None, :], E_STAR, DG, 1e-10, 1e-8) == 1e-10
+    C = (18 * ANG) ** 2 * SHAPE[None, :]
+    small = layer_resolving_offset(Q, C, E_STAR, DG, 1e-10, 1e-14)
+    assert small < 1e-10
+    prob = _Problem(Q, C, E_STAR, DG, zeta_grid(Q1 / Q0, 6, small))
+    assert prob.a[0, 1] <= 1.0001e-3 * 1e-14 * prob.F[0]
 
 
 # --- full contact -------------------------------------------------------------------------
@@ -196,8 +216,11 @@ def test_extremes_are_finite_and_bounded(Hx, log_h, log_dg, eta, ratio):
 @settings(max_examples=10, deadline=None)
 @given(sigma_a=st.floats(0.0, 50.0), sigma0=st.floats(0.0, 50.0))
 def test_volterra_extremes(sigma_a, sigma0):
+    """Any stresses, as long as the first cell resolves the detachment layer, a_1 << (sigma_a + sigma0)^2
+    (the stage makes sure of that, see layer_resolving_offset), or sigma_a + sigma0 = 0 (P = 0 at once)."""
     zeta = zeta_grid(1e4, 5, 1e-10)
     a = (zeta - 1.0)[None, :]
+    assume(sigma_a + sigma0 == 0 or (sigma_a + sigma0) ** 2 > 1e3 * a[0, 1])
     P = detachment_volterra(a, np.full_like(a, sigma_a), sigma0)
     assert np.all((P >= 0) & (P <= 1)) and np.all(np.diff(P) <= 1e-12)
     exact = erf((sigma_a + sigma0) / (2.0 * np.sqrt(a[:, 1:])))
