@@ -718,12 +718,16 @@ def _vanishing(ds, psd, c0, c1, q, E_star, dg, zeta_values, K_min, tol, sigma0):
     C1 = psd["psd_substrate"].isel(hrms_substrate=order)
     C2 = psd["psd_solid"]
     eta = psd["eta"] if "eta" in psd.coords else xr.DataArray(0.0)
-    h, status = xr.apply_ufunc(
-        _vanishing_kernel, K, C1, C2, eta, c0, c1,
-        input_core_dims=[["hrms_substrate"], ["hrms_substrate", "q"], ["q"], [], [], []],
-        output_core_dims=[[], []], output_dtypes=[float, int],
-        kwargs=dict(hs=hs[order], q=q, E_star=E_star, delta_gamma=dg, zeta=zeta_values, K_min=K_min, tol=tol),
-    )
+    try:
+        h, status = xr.apply_ufunc(
+            _vanishing_kernel, K, C1, C2, eta, c0, c1,
+            input_core_dims=[["hrms_substrate"], ["hrms_substrate", "q"], ["q"], [], [], []],
+            output_core_dims=[[], []], output_dtypes=[float, int],
+            kwargs=dict(hs=hs[order], q=q, E_star=E_star, delta_gamma=dg, zeta=zeta_values, K_min=K_min, tol=tol),
+        )
+    except ComputationError as exc:
+        cases = ", ".join(f"{d} = {list(np.atleast_1d(K[d].values))}" for d in K.dims if d != "hrms_substrate" and d in K.coords)
+        raise ComputationError(f"adhesion stage, hrms at which adhesion vanishes ({cases or 'one case'}): {exc}") from None
     flat = np.ravel(status.values)
     if np.any(flat != 0):
         first = int(np.flatnonzero(flat)[0])
@@ -801,8 +805,8 @@ def figure_one_surface(results):
     if "eta" in ds.dims:
         ds = ds.isel(eta=0)
     fig, ax_a, ax_b = _axes("One rough surface (seed Fig. 1)")
-    for label, d in _per_model(ds):
-        _curve(ax_a, ax_b, d, f"partial contact ({label})" if label else "partial contact", "-", full=True)
+    for k, (label, d) in enumerate(_per_model(ds)):
+        _curve(ax_a, ax_b, d, f"partial contact ({label})" if label else "partial contact", "-", full=(k == 0))
     top = float(ds["gamma_eff_full_contact"].max() / ds["delta_gamma"])
     ax_a.set_ylim(0, max(1.02, 1.05 * top))
     ax_a.legend(fontsize=8)

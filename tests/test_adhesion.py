@@ -320,3 +320,19 @@ def test_non_convergence_in_the_stage_names_the_sweep_point(tmp_path, monkeypatc
     with pytest.raises(ComputationError, match=r"hrms_substrate=1\.5e-09.*residual 0\.25"):
         _run(_raw(["10 angstrom", "15 angstrom"], {"vanishing_hrms": False}), tmp_path)
     assert not (tmp_path / "adhesion.nc").exists()
+
+
+def test_figures_draw(tmp_path):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from stages.adhesion import figure_one_surface, figure_two_surfaces
+
+    raw = _raw(["5 angstrom", "12 angstrom", "20 angstrom"],
+               solid={"kind": "self_affine", "H": 0.8, "qL": "7e6 1/m", "q1": "1.4e9 1/m", "hrms": "6 angstrom"},
+               eta=[0.0, -1.0])
+    raw["variants"] = {"substrate_only": {"solid": {"kind": "smooth"}}}
+    results = engine.run(scenes.from_dict(raw), tmp_path, report=engine.Reporter(None))
+    for make in (figure_one_surface, figure_two_surfaces):
+        fig = make(results)
+        assert len(fig.axes) == 2 and all(ax.lines for ax in fig.axes)
