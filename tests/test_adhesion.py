@@ -330,7 +330,7 @@ def test_figures_draw(tmp_path):
 
     raw = _raw(["5 angstrom", "12 angstrom", "20 angstrom"],
                solid={"kind": "self_affine", "H": 0.8, "qL": "7e6 1/m", "q1": "1.4e9 1/m", "hrms": "6 angstrom"},
-               eta=[0.0, -1.0])
+               eta=[0.0])
     raw["variants"] = {"substrate_only": {"solid": {"kind": "smooth"}}}
     results = engine.run(scenes.from_dict(raw), tmp_path, report=engine.Reporter(None))
     for make in (figure_one_surface, figure_two_surfaces):
