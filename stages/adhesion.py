@@ -544,7 +544,8 @@ register_section(
 )
 register_params(
     "numerics",
-    Param("adhesion_points_per_decade", "int", default=10, lo=2,
+    Param("adhesion_points_per_decade", "int", default=10, lo=2, presets={"fast": 5, "accurate": 20},
+          ladder=(3, 4, 5, 7, 10, 14, 20, 28, 40),
           doc="adhesion: Volterra nodes per decade of (zeta - 1)"),
     Param("adhesion_zeta_offset", "quantity", "", default=1e-10, lo=0.0, lo_open=True, hi=1e-2,
           doc="adhesion: smallest zeta - 1 of the Volterra grid (geometric refinement towards zeta = 1)"),
@@ -841,6 +842,8 @@ register(
         version="1",
         compute=compute_adhesion,
         requires=("psd",),
+        main_outputs=("hrms_substrate_vanishing",),
+        tolerance=1e-3,
         params=("material.E", "material.nu", "adhesion", "numerics.adhesion_points_per_decade",
                 "numerics.adhesion_zeta_offset", "numerics.adhesion_K_min", "numerics.adhesion_tolerance"),
         outputs={
