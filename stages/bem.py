@@ -172,6 +172,26 @@ def pair_coherence(h1, h2, pixel_size, q_edges):
         return c12 / np.sqrt(c11 * c22)
 
 
+def fourier_refine(h, n):
+    """The same band-limited periodic map sampled on a finer n x n grid (m), by zero-padding
+    its Fourier transform: the surface is unchanged, only the discretization is refined (the
+    grid-convergence check of docs/bem.md).
+
+    The map's Nyquist row and column are dropped; they are zero for maps synthesized with
+    ``pixels_per_wavelength`` > 2.
+    """
+    h = np.asarray(h, dtype=float)
+    m = h.shape[0]
+    if h.shape != (m, m) or n < m:
+        raise ValueError("fourier_refine needs a square map and n >= its size")
+    H = np.fft.rfft2(h)
+    k = (m + 1) // 2  # modes 0 .. k-1 and -(k-1) .. -1 along the first axis; 0 .. k-1 along the second
+    out = np.zeros((n, n // 2 + 1), dtype=complex)
+    out[:k, :k] = H[:k, :k]
+    out[n - (k - 1):, :k] = H[m - (k - 1):, :k]
+    return np.fft.irfft2(out, s=(n, n)) * (n * n) / (m * m)
+
+
 def rms_slope_of_map(h, pixel_size):
     """Root-mean-square slope of a periodic map (dimensionless), spectrally:
     xi^2 = sum_k |k|^2 |H_k|^2 (the continuum's 2 pi \\int q^3 C dq, eq 12)."""
@@ -264,7 +284,13 @@ def solve_contact(heights, pixel_size, E_star, pressures, *, tolerance=1e-10, st
     model.nu = 0.0  # E* = E / (1 - nu^2) = 1 in reduced units
     solver = tm.PolonskyKeerRey(model, np.ascontiguousarray(surface), float(tolerance))
     for i, p in enumerate(pressures):
-        solver.solve(float(p / E_star))
+        try:
+            solver.solve(float(p / E_star))
+        except tm.FloatingPointError as exc:  # PKR's error measure is 0/0 with one node in contact
+            raise UserError(
+                f"the BEM cannot solve p = {p:.6g} Pa on this {nx} x {ny} map: the contact area is a single "
+                f"pixel or less (tamaas: {str(exc).strip().splitlines()[-1]}); use larger pressures or a finer "
+                f"bem.grid", key="load.p") from None
         traction = np.array(model.traction, copy=True).reshape(nx, ny) * E_star
         gap = (np.array(model.displacement, copy=True).reshape(nx, ny) - surface) * pixel_size
         contact = traction > 0
