@@ -526,24 +526,30 @@ def figure_bem_comparison(results):
     for k, eta in enumerate(ds["eta"].values):
         d = ds.isel(eta=k)
         label = "pair" if np.isnan(eta) else f"eta = {eta:+g}".replace("+0", "0")
+        if np.all(d["bem_hrms_combined"].values == 0):
+            label += " (h1 = h2: full contact)"
         color = f"C{k}"
-        axes[0].semilogx(x, d["theory_contact_area_ratio"], "-", color=color, label=f"theory, {label}")
+        axes[0].loglog(x, d["theory_contact_area_ratio"], "-", color=color, label=f"theory, {label}")
         axes[0].errorbar(x, d["bem_contact_area_ratio_mean"], yerr=d["bem_contact_area_ratio_std"], fmt="o",
                          color=color, markersize=4, capsize=2, label=f"BEM, {label}")
         axes[1].semilogx(x, d["theory_mean_separation"] * 1e9, "-", color=color)
         axes[1].errorbar(x, d["bem_mean_gap_mean"] * 1e9, yerr=d["bem_mean_gap_std"] * 1e9, fmt="o",
                          color=color, markersize=4, capsize=2)
-        axes[2].semilogx(x, d["area_ratio_theory_to_bem"], "o-", color=color, markersize=4, label=f"A/A0, {label}")
-        axes[2].semilogx(x, d["separation_ratio_theory_to_bem"], "s--", color=color, markersize=4,
-                         label=f"u, {label}")
+        for var, style, what in (("area_ratio_theory_to_bem", "o-", "A/A0"), ("separation_ratio_theory_to_bem", "s--", "u")):
+            if np.any(np.isfinite(d[var].values)):
+                axes[2].semilogx(x, d[var], style, color=color, markersize=4, label=f"{what}, {label}")
     axes[0].set_ylabel("A / A0")
-    axes[0].set_ylim(0, 1.02)
+    axes[0].set_ylim(top=1.3)
     axes[0].legend(fontsize=7)
+    axes[0].set_title("contact area: theory (lines), BEM (points)", fontsize=9)
     axes[1].set_ylabel("mean separation u (nm)")
     axes[1].set_ylim(bottom=0)
+    axes[1].set_title("mean separation (error bars: spread over realizations)", fontsize=9)
     axes[2].axhline(1.0, color="0.5", linewidth=0.8)
     axes[2].set_ylabel("theory / BEM")
-    axes[2].legend(fontsize=7)
+    axes[2].set_title("ratios, same band on both sides", fontsize=9)
+    axes[2].set_ylim(top=max(1.4, axes[2].get_ylim()[1] * 1.15))
+    axes[2].legend(fontsize=7, ncol=2, loc="upper center")
     for ax in axes:
         ax.set_xlabel("p / E*")
         ax.grid(alpha=0.3)
