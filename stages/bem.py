@@ -77,17 +77,30 @@ def psd_on_lattice(q_lattice, q, C, q_cut):
     return np.maximum(out, 0.0)
 
 
-def white_noise_pair(n: int, seed: int, realization: int) -> tuple[np.ndarray, np.ndarray]:
-    """Two independent unit complex Gaussian white noises xi1, xi2 on the rfft2 lattice.
+def white_noise_pair(n: int, seed: int, realization: int, band: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Two independent unit complex Gaussian white noises xi1, xi2 on the rfft2 lattice (n, n//2 + 1).
 
-    xi = rfft2(w) / n with w an n x n field of independent standard normals, so
-    <|xi_k|^2> = 1 and xi is Hermitian (its inverse transform is real). Drawn from
-    ``numpy.random.default_rng([seed, realization])``: realization r is the same whatever the
-    number of realizations asked for.
+    xi = rfft2(w) / m with w an m x m field of independent standard normals, so <|xi_k|^2> = 1
+    and xi is Hermitian (its inverse transform is real). With ``band`` = K (the highest |q| / qL
+    that will be used), w is drawn on the smallest even grid m = 2 floor(K) + 2 holding every
+    mode |i|, |j| <= K, and those modes are placed on the n x n lattice: the noise in the band
+    then does not depend on n, so the same seed gives the *same surface* on a finer grid (only
+    the discretization changes). Without ``band`` (or when m > n), m = n.
+    Drawn from ``numpy.random.default_rng([seed, realization])``: realization r is the same
+    whatever the number of realizations asked for.
     """
     rng = np.random.default_rng([int(seed), int(realization)])
-    w = rng.standard_normal((2, n, n))
-    xi = np.fft.rfft2(w, axes=(-2, -1)) / n
+    m = n if band is None else 2 * int(np.floor(band + 1e-9)) + 2
+    if m >= n:
+        w = rng.standard_normal((2, n, n))
+        xi = np.fft.rfft2(w, axes=(-2, -1)) / n
+        return xi[0], xi[1]
+    w = rng.standard_normal((2, m, m))
+    small = np.fft.rfft2(w, axes=(-2, -1)) / m
+    k = m // 2  # rows 0 .. k-1 and -(k-1) .. -1, columns 0 .. k-1: every |i|, |j| <= K (m's Nyquist dropped)
+    xi = np.zeros((2, n, n // 2 + 1), dtype=complex)
+    xi[:, :k, :k] = small[:, :k, :k]
+    xi[:, n - (k - 1):, :k] = small[:, m - (k - 1):, :k]
     return xi[0], xi[1]
 
 
@@ -133,7 +146,7 @@ def synthesize_pair(q, C1, C2, eta, n, q_cut, seed=0, realization=0, noise=None)
     q = np.asarray(q, dtype=float)
     L = 2.0 * np.pi / q[0]
     ql = lattice_wavenumbers(n, L / n)
-    xi1, xi2 = noise if noise is not None else white_noise_pair(n, seed, realization)
+    xi1, xi2 = noise if noise is not None else white_noise_pair(n, seed, realization, band=q_cut / q[0])
     a1 = (2.0 * np.pi / L) * np.sqrt(psd_on_lattice(ql, q, C1, q_cut))
     a2 = (2.0 * np.pi / L) * np.sqrt(psd_on_lattice(ql, q, C2, q_cut))
     H1 = a1 * xi1
@@ -411,7 +424,7 @@ def compute_bem(inp: StageInput) -> xr.Dataset:
     hrms, slope = np.empty(shape[1:]), np.empty(shape[1:])
     order = np.argsort(p_values)  # increasing load: each solve starts from the previous one
     for r in range(R):
-        noise = white_noise_pair(n, seed, r)
+        noise = white_noise_pair(n, seed, r, band=zeta_bem)
         for j, eta in enumerate(eta_values):
             h1, h2 = synthesize_pair(q, C1, C2, eta, n, q_cut, noise=noise)
             hrms[j, r] = float(np.std(h1 - h2))
@@ -476,7 +489,8 @@ def compute_bem(inp: StageInput) -> xr.Dataset:
                             f"roughness on qL <= |q| <= q_cut = {q_cut:.6g} 1/m (zeta_bem = {zeta_bem:.6g}); "
                             f"theory read at the same zeta",
         "bem_synthesis": "H1 = (2 pi/L) sqrt(C1) xi1, H2 = (2 pi/L) sqrt(C2) (eta xi1 + sqrt(1 - eta^2) xi2), "
-                         "xi = rfft2(white noise)/n from numpy.random.default_rng([seed, realization]); "
+                         "xi = rfft2(white noise)/m on the smallest grid m holding the band (so a finer grid gives the same "
+                         "surface), from numpy.random.default_rng([seed, realization]); "
                          "the same noise for every eta of a realization",
         "bem_seed": int(seed),
     })

@@ -20,6 +20,7 @@ from pipeline import cli
 from pipeline.errors import UserError
 from stages.bem import (
     EXTRA,
+    figure_bem_comparison,
     fourier_refine,
     grid_band,
     lattice_wavenumbers,
@@ -122,9 +123,20 @@ def test_same_seed_same_maps_and_realizations_independent_of_count():
     c = synthesize_pair(Q, C_SHAPE, C_SHAPE, 0.3, 32, 8.0, seed=10, realization=2)
     assert np.array_equal(a[0], b[0]) and np.array_equal(a[1], b[1])
     assert not np.allclose(a[0], c[0])
-    xi = white_noise_pair(32, 9, 2)
+    xi = white_noise_pair(32, 9, 2, band=8.0)
     d = synthesize_pair(Q, C_SHAPE, C_SHAPE, 0.3, 32, 8.0, noise=xi)
     assert np.array_equal(a[0], d[0])
+
+
+def test_same_seed_same_surface_on_a_finer_grid():
+    """The noise in the band does not depend on the grid: with the same seed and q_cut, the
+    128^2 map is the 32^2 map Fourier-interpolated (so grid refinement changes only the
+    discretization, in the stage too)."""
+    coarse = synthesize_pair(Q, C_SHAPE, 0.5 * C_SHAPE, -0.4, 32, 8.0, seed=6, realization=1)
+    fine = synthesize_pair(Q, C_SHAPE, 0.5 * C_SHAPE, -0.4, 128, 8.0, seed=6, realization=1)
+    for c, f in zip(coarse, fine):
+        np.testing.assert_allclose(f, fourier_refine(c, 128), rtol=0, atol=1e-12 * np.abs(c).max())
+        np.testing.assert_allclose(f[::4, ::4], c, rtol=0, atol=1e-12 * np.abs(c).max())
 
 
 def test_grid_band_mapping():
@@ -205,11 +217,10 @@ def test_exact_scaling_of_linear_elasticity():
 
 
 def refined_gaps(grids, seed=4):
-    """Mean gap and area of one band-limited surface (synthesized on 32^2, q_cut = 8 qL) on finer grids."""
-    h1, h2 = synthesize_pair(Q, C_SHAPE, C_SHAPE, 0.0, 32, 8.0, seed=seed)
-    h = h1 - h2
-    p = np.array([0.006, 0.01, 0.03, 0.1, 0.3]) * np.std(h)  # E* = 1, L = 2 pi: A/A0 from ~0.003 to ~0.15
-    res = [solve_contact(fourier_refine(h, n), 2 * np.pi / n, 1.0, p) for n in grids]
+    """Mean gap and area of one surface (q_cut = 8 qL, same seed: the same surface) on each grid."""
+    maps = {n: np.subtract(*synthesize_pair(Q, C_SHAPE, C_SHAPE, 0.0, n, 8.0, seed=seed)) for n in grids}
+    p = np.array([0.006, 0.01, 0.03, 0.1, 0.3]) * np.std(maps[grids[0]])  # E* = 1, L = 2 pi: A/A0 ~0.003-0.15
+    res = [solve_contact(maps[n], 2 * np.pi / n, 1.0, p) for n in grids]
     return np.array([r["mean_gap"] for r in res]), np.array([r["area"] for r in res])
 
 
@@ -280,6 +291,23 @@ def test_stage_physics_and_comparison(run_scene):
     # the synthesized composite's rms slope and height match the psd stage's within sampling
     hrms = ds["bem_hrms_combined"].sel(eta=0.0)
     assert np.all(np.abs(hrms / np.sqrt(2e-18) - 1) < 0.3)
+    fig = figure_bem_comparison({"base": {"bem": ds}})
+    assert len(fig.axes) == 3 and len(fig.axes[0].lines) >= 3
+
+
+def test_stage_grid_refinement_same_surfaces(run_scene, tmp_path):
+    """bem.grid 64 -> 128 with pixels_per_wavelength 4 -> 8: the same zeta_bem and the same
+    surfaces (same seed), so only the discretization changes: the mean gap moves by < 1 % and
+    the contact area falls (coarse grids overestimate it)."""
+    pytest.importorskip("tamaas")
+    one = {"interface": {"eta": 0.0}, "bem": {"realizations": 1}}
+    a = run_scene(bem_scene(**one), outdir=tmp_path / "a")["base"]["bem"]
+    b = run_scene(bem_scene(interface={"eta": 0.0}, bem={"realizations": 1, "grid": 128, "pixels_per_wavelength": 8}),
+                  outdir=tmp_path / "b")["base"]["bem"]
+    assert float(a["bem_zeta"]) == float(b["bem_zeta"]) == pytest.approx(16.0)
+    np.testing.assert_allclose(b["bem_hrms_combined"], a["bem_hrms_combined"], rtol=1e-12)
+    np.testing.assert_allclose(b["bem_mean_gap_mean"], a["bem_mean_gap_mean"], rtol=1e-2)
+    assert np.all(b["bem_contact_area_ratio_mean"] < a["bem_contact_area_ratio_mean"])
 
 
 def test_stage_is_reproducible_and_seeded(run_scene, tmp_path):
