@@ -292,18 +292,28 @@ def solve_contact(heights, pixel_size, E_star, pressures, *, tolerance=1e-10, st
                     out["overflow"][i] = 1.0
         return out
     tm = _tamaas()
-    model = tm.ModelFactory.createModel(tm.model_type.basic_2d, [float(nx), float(ny)], [nx, ny])
-    model.E = 1.0
-    model.nu = 0.0  # E* = E / (1 - nu^2) = 1 in reduced units
-    solver = tm.PolonskyKeerRey(model, np.ascontiguousarray(surface), float(tolerance))
+
+    def fresh():
+        model = tm.ModelFactory.createModel(tm.model_type.basic_2d, [float(nx), float(ny)], [nx, ny])
+        model.E = 1.0
+        model.nu = 0.0  # E* = E / (1 - nu^2) = 1 in reduced units
+        return model, tm.PolonskyKeerRey(model, np.ascontiguousarray(surface), float(tolerance))
+
+    model, solver = fresh()
     for i, p in enumerate(pressures):
-        try:
-            solver.solve(float(p / E_star))
-        except tm.FloatingPointError as exc:  # PKR's error measure is 0/0 with one node in contact
-            raise UserError(
-                f"the BEM cannot solve p = {p:.6g} Pa on this {nx} x {ny} map: the contact area is a single "
-                f"pixel or less (tamaas: {str(exc).strip().splitlines()[-1]}); use larger pressures or a finer "
-                f"bem.grid", key="load.p") from None
+        for attempt in (0, 1):
+            try:
+                solver.solve(float(p / E_star))
+                break
+            except tm.FloatingPointError as exc:
+                # PKR's error measure is 0/0 when the contact is one node; a warm start from a
+                # one-node solution can hit it where a cold start does not: retry cold once
+                if attempt:
+                    raise UserError(
+                        f"the BEM cannot solve p = {p:.6g} Pa on this {nx} x {ny} map: the contact area is a "
+                        f"single pixel or less (tamaas: {str(exc).strip().splitlines()[-1]}); use larger "
+                        f"pressures or a finer bem.grid", key="load.p") from None
+                model, solver = fresh()
         traction = np.array(model.traction, copy=True).reshape(nx, ny) * E_star
         gap = (np.array(model.displacement, copy=True).reshape(nx, ny) - surface) * pixel_size
         contact = traction > 0

@@ -20,6 +20,7 @@ from pipeline import cli
 from pipeline.errors import UserError
 from stages.bem import (
     EXTRA,
+    contact_pair,
     figure_bem_comparison,
     fourier_refine,
     grid_band,
@@ -246,6 +247,38 @@ def test_mean_gap_and_area_converge_to_512():
         area_err = np.max(np.abs(areas[:-1] / areas[-1] - 1), axis=1)
         assert np.all(np.diff(gap_err) < 0) and gap_err[-1] < 2e-4, gap_err
         assert np.all(np.diff(area_err) < 0), area_err
+
+
+def test_pressure_extremes_bounded_with_exact_limits():
+    """p/E* from 1e-12 to 1e6 (relative to the rms height over the cell): A/A0 in (0, 1] and
+    non-decreasing, the mean gap non-increasing in [0, max h - mean h]; p -> 0: the gap tends
+    to max h - mean h (rigid contact at the highest point); large p: full contact, gap -> 0."""
+    pytest.importorskip("tamaas")
+    h = np.subtract(*synthesize_pair(Q, C_SHAPE, C_SHAPE, 0.0, 32, 8.0, seed=1))
+    p = np.geomspace(1e-12, 1e6, 10) * np.std(h)
+    res = solve_contact(h, 2 * np.pi / 32, 1.0, p)
+    area, gap = res["area"], res["mean_gap"]
+    assert np.all((area > 0) & (area <= 1)) and np.all(np.diff(area) >= 0)
+    top = h.max() - h.mean()
+    assert np.all((gap >= 0) & (gap <= top * (1 + 1e-9))) and np.all(np.diff(gap) <= 1e-9 * top)
+    assert gap[0] == pytest.approx(top, rel=1e-6)
+    assert area[-1] == 1.0 and gap[-1] < 1e-6 * top
+
+
+@settings(max_examples=15, deadline=None)
+@given(eta=st.floats(-1.0, 1.0), log_p=st.floats(-9.0, 3.0), seed=st.integers(0, 50))
+def test_random_pairs_bounded_or_user_error(eta, log_p, seed):
+    """Any coherence and pressure: finite, bounded results, or the one clear error for a
+    contact below one pixel (key load.p)."""
+    pytest.importorskip("tamaas")
+    h1, h2 = synthesize_pair(Q, C_SHAPE, 0.3 * C_SHAPE, eta, 16, 6.0, seed=seed)
+    try:
+        res = contact_pair(h1, h2, 2 * np.pi / 16, 1.0, [10.0**log_p * np.std(h1 - h2)])
+    except UserError as exc:
+        assert exc.key == "load.p" and "single pixel" in exc.message
+        return
+    top = np.ptp(h1 - h2)
+    assert 0 < res["area"][0] <= 1 and 0 <= res["mean_gap"][0] <= top
 
 
 def test_flat_composite_is_full_contact_without_solver():
