@@ -228,7 +228,7 @@ def refined_gaps(grids, seed=4):
 def test_mean_gap_converges_with_grid_refinement():
     """The same surface on 32^2, 64^2, 128^2 grids (4, 8, 16 pixels per shortest wavelength):
     the largest relative change of the mean gap against the 128^2 result falls by more than 2x
-    per refinement and is below 5e-3 at 64^2 (measured: 8e-3 then 3.5e-3; docs/bem.md)."""
+    per refinement and is below 5e-3 at 64^2 (docs/bem.md has the table)."""
     pytest.importorskip("tamaas")
     gaps, _ = refined_gaps((32, 64, 128))
     err = np.max(np.abs(gaps[:-1] / gaps[-1] - 1), axis=1)
