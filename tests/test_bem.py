@@ -343,6 +343,17 @@ def test_stage_grid_refinement_same_surfaces(run_scene, tmp_path):
     assert np.all(b["bem_contact_area_ratio_mean"] < a["bem_contact_area_ratio_mean"])
 
 
+def test_stage_one_smooth_surface_has_no_eta(run_scene):
+    """A substrate-only variant (solid smooth): eta has no effect, no eta dimension; the
+    composite is the substrate alone (hrms within sampling of 1 nm) and A/A0 rises with p."""
+    pytest.importorskip("tamaas")
+    raw = bem_scene(bem={"realizations": 1}, variants={"substrate_only": {"solid": {"kind": "smooth"}}})
+    ds = run_scene(raw)["substrate_only"]["bem"]
+    assert "eta" not in ds.dims and ds["bem_contact_area_ratio"].dims == ("p", "realization")
+    assert abs(float(ds["bem_hrms_combined"].squeeze()) / 1e-9 - 1) < 0.3
+    assert np.all(ds["bem_contact_area_ratio_mean"].diff("p") > 0)
+
+
 def test_stage_is_reproducible_and_seeded(run_scene, tmp_path):
     pytest.importorskip("tamaas")
     a = run_scene(bem_scene(interface={"eta": 0.0}), outdir=tmp_path / "a")["base"]["bem"]
