@@ -139,7 +139,7 @@ def test_builtin_has_one_broad_maximum(builtin):
 # ----------------------------------------------------------------------------------------
 
 
-def _brute_force_mu(v, spec, psd_specs, sigma0, nu):
+def _brute_force_mu(v, spec, psd_specs, sigma0, nu, rtol=1e-10):
     """mu and A/A0 from eqs 61-62 with no grid at all: quad over phi (adaptive, rtol 1e-11) for
     the angular integrals of the analytic box modulus, and an adaptive ODE solver (DOP853,
     rtol 1e-10) for the q integrals of G and mu together, in the variable x = sqrt(ln(q/q0))
@@ -163,7 +163,7 @@ def _brute_force_mu(v, spec, psd_specs, sigma0, nu):
         return out
 
     k = 1.0 / ((1 - nu * nu) * sigma0)
-    opts = dict(epsabs=0.0, epsrel=1e-11, limit=400)
+    opts = dict(epsabs=0.0, epsrel=rtol / 10, limit=400)
 
     def rhs(x, y):
         q = q0 * math.exp(x * x)
@@ -175,7 +175,7 @@ def _brute_force_mu(v, spec, psd_specs, sigma0, nu):
         c = q**3 * C(q) * jac
         return [0.5 * k * k * c * A, 2 * k * c * P * B]
 
-    sol = solve_ivp(rhs, (0.0, math.sqrt(math.log(q1 / q0))), [0.0, 0.0], method="DOP853", rtol=1e-10, atol=1e-30)
+    sol = solve_ivp(rhs, (0.0, math.sqrt(math.log(q1 / q0))), [0.0, 0.0], method="DOP853", rtol=rtol, atol=1e-30)
     G, mu = sol.y[:, -1]
     return mu, math.erf(1 / (2 * math.sqrt(G)))
 
