@@ -15,6 +15,7 @@ from pipeline.errors import UserError
 from pipeline.schema import Param, Section
 from pipeline.stage import Figure, Stage, StageInput, Var, register, register_params, register_section
 
+from ._plotting import curve_cases
 from .quadrature import integral_to
 
 # ----------------------------------------------------------------------------------------
@@ -227,16 +228,7 @@ def compute_contact(inp: StageInput) -> xr.Dataset:
 
 
 def _cases(results):
-    """(label, Dataset) per curve: the substrate-only variant if present, then each eta."""
-    out = []
-    if "substrate_only" in results:
-        out.append(("substrate only", results["substrate_only"]["contact"]))
-    base = results["base"]["contact"]
-    if "eta" in base.dims:
-        out += [(f"eta = {e:+g}", base.sel(eta=e)) for e in base["eta"].values]
-    else:
-        out.append(("pair", base))
-    return out
+    return curve_cases(results, "contact")
 
 
 def _at_zeta(ds, zeta):

@@ -30,6 +30,7 @@ from pipeline.schema import Param, Section
 from pipeline.stage import Figure, Stage, StageInput, Var, register, register_params, register_section
 
 from .contact import _zeta_values, effective_modulus
+from ._plotting import curve_cases
 from .quadrature import (
     cumulative_integral,
     gauss_legendre_panels,
@@ -396,15 +397,7 @@ def _node_count(q, q_upper, ppd, order, depth):
 
 
 def _cases(results):
-    out = []
-    if "substrate_only" in results and "separation" in results["substrate_only"]:
-        out.append(("substrate only", results["substrate_only"]["separation"]))
-    base = results["base"]["separation"]
-    if "eta" in base.dims:
-        out += [(f"eta = {e:+g}", base.sel(eta=e)) for e in base["eta"].values]
-    else:
-        out.append(("pair", base))
-    return out
+    return curve_cases(results, "separation")
 
 
 def figure_separation(results, zeta=4.0):
