@@ -117,6 +117,9 @@ def _plot(sc, outdir: Path, reporter, scheduler=None) -> int:
 
     needed = {st.name for st in engine.needed_stages(sc, sc.outputs)}
     figures = [f for st in stages().values() for f in st.figures if set(f.stages) <= needed]
+    for f in [f for f in figures if not set(f.outputs) <= set(sc.outputs)]:
+        print(f"{f.title}: skipped (add {', '.join(sorted(set(f.outputs) - set(sc.outputs)))} to outputs.variables)")
+    figures = [f for f in figures if set(f.outputs) <= set(sc.outputs)]
     if not figures:
         raise UserError("none of the scene's stages draws a figure", key="outputs.variables")
     results = engine.run(sc, outdir, report=reporter, scheduler=scheduler)

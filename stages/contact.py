@@ -320,7 +320,8 @@ register(
         },
         figures=(
             Figure("fig3_contact_area", "A/A0 against p/E* (seed Fig. 3)", ("contact",), figure_contact_area),
-            Figure("fig4_stress_distribution", "P(sigma) (seed Fig. 4)", ("contact",), figure_stress_distribution),
+            Figure("fig4_stress_distribution", "P(sigma) (seed Fig. 4)", ("contact",), figure_stress_distribution,
+                   outputs=("stress_distribution",)),
         ),
         doc="G(zeta), A/A0(p, zeta, eta) and optionally P(sigma; p, zeta, eta).",
         point_bytes=_point_bytes,
