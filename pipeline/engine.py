@@ -246,6 +246,14 @@ def _run(scene, outdir, targets, force, report, compute_with):
     for folder in {p.path.parent for p in plans}:
         store.clean_temporaries(folder)
     results: dict[str, dict[str, xr.Dataset]] = {v: {} for v in scenes}
+    # read every input file and run every validation before anything computes or is written
+    files: dict[int, dict] = {}
+    for i, p in enumerate(plans):
+        if p.status == "fresh":
+            continue
+        files[i] = {param: _read(p.stage, param, path) for param, path in p.file_paths.items()}
+        if p.stage.validate is not None:
+            p.stage.validate(StageInput(params=p.params, files=files[i], wanted=p.wanted))
     n = len(plans)
     for i, p in enumerate(plans, start=1):
         tag = f"[{i}/{n}] {p.label}"
@@ -255,12 +263,11 @@ def _run(scene, outdir, targets, force, report, compute_with):
             continue
         report(f"{tag}: computing ({'; '.join(p.reasons)})")
         t0 = time.perf_counter()
-        files = {param: _read(p.stage, param, path) for param, path in p.file_paths.items()}
         upstream = {up: results[p.variant][up] for up in p.record["upstream"]}
         inp = StageInput(
             params=p.params,
             upstream=upstream,
-            files=files,
+            files=files[i - 1],
             wanted=p.wanted,
             chunks=stage_chunks(scenes[p.variant], p.stage, p.params, p.wanted, upstream),
         )

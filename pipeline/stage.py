@@ -88,6 +88,11 @@ class Stage:
     #: parameters, the optional outputs asked for and the upstream results (lazy or small);
     #: the engine sizes chunks with it (default 512)
     point_bytes: Callable[[Mapping[str, Any], frozenset, Mapping[str, xr.Dataset]], int] | None = None
+    #: optional ``validate(StageInput) -> None``: checks that can fail on the user's input (a file's
+    #: contents, a missing optional package) without computing; the engine runs it for every stage
+    #: about to compute, before any of them computes, so a bad input writes nothing at all.
+    #: ``inp.upstream`` is empty there.
+    validate: Callable[["StageInput"], None] | None = None
     #: the outputs whose error ``roughcontact accuracy`` measures (default: none: not measured)
     main_outputs: tuple[str, ...] = ()
     #: the relative error the default preset must reach on ``main_outputs``

@@ -395,8 +395,12 @@ def _at_zeta(ds: xr.Dataset, var: str, zeta: float, stage: str) -> xr.DataArray:
     return da.isel(zeta=int(hit[0])) if "zeta" in da.dims else da
 
 
+def validate_bem(inp: StageInput) -> None:
+    """Before anything computes: the optional dependency must be there."""
+    _tamaas()
+
+
 def compute_bem(inp: StageInput) -> xr.Dataset:
-    _tamaas()  # fail first, with the install line, if the extra is missing
     psd = inp.upstream["psd"]
     q = psd["q"].values
     for name in ("psd_substrate", "psd_solid"):
@@ -589,6 +593,7 @@ register(
         name="bem",
         version="1",
         compute=compute_bem,
+        validate=validate_bem,
         requires=("psd", "contact", "separation"),
         params=("material.E", "material.nu", "load.p", "interface.eta", "bem.grid", "bem.realizations", "bem.seed",
                 "bem.pixels_per_wavelength", "numerics.bem_tolerance", "numerics.bem_stress_bins",

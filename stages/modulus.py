@@ -503,6 +503,18 @@ def _omega_grid(spec, aT: np.ndarray, ppd: int, data_omega=None) -> np.ndarray:
     return np.geomspace(lo, hi, max(n, 4))
 
 
+def validate_modulus(inp: StageInput) -> None:
+    """Before anything computes: the [modulus] section, the temperature shift and a master-curve
+    file's contents (non-increasing frequency, negative moduli, NaNs, units)."""
+    spec = inp["modulus"]
+    if spec is None:
+        raise UserError("this scene needs the complex modulus: add a [modulus] section "
+                        "(kind = 'box', 'prony', 'elastic' or 'file')", key="modulus")
+    _shift_factors(spec, np.atleast_1d(np.asarray(spec["T"], dtype=float)))
+    if spec["kind"] == "file":
+        read_master_curve(spec, inp.files["modulus.path"])
+
+
 def compute_modulus(inp: StageInput) -> xr.Dataset:
     spec = inp["modulus"]
     if spec is None:
@@ -619,6 +631,7 @@ register(
         name="modulus",
         version="1",
         compute=compute_modulus,
+        validate=validate_modulus,
         params=("modulus", "numerics.modulus_points_per_decade"),
         files=(FileInput("modulus.path", reader="table"),),
         outputs={

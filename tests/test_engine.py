@@ -155,3 +155,20 @@ def test_cli_run_plan_show_and_exit_codes(tmp_path, capsys, write_scene):
     assert "contact_area_ratio" in shown and "material.E" in shown
     assert main(["run", str(path), "--outdir", out, "--quiet", "--force", "contact"]) == 0
     assert main(["run", str(path), "--outdir", out, "--quiet", "--force", "nosuchstage"]) == 2
+
+
+def test_a_bad_input_file_of_a_later_stage_writes_nothing_at_all(tmp_path, capsys, write_scene):
+    """Validation runs for every stage before any computes: a master curve with a negative E''
+    stops the run before psd (which does not need it) is written."""
+    curve = tmp_path / "curve.txt"
+    curve.write_text("# f [Hz]  E' [MPa]  E'' [MPa]\n1 5 0.1\n10 6 -0.3\n100 8 1\n")
+    raw = scenes.load("friction").raw
+    raw.pop("variants", None)
+    raw["modulus"] = {"kind": "file", "path": str(curve), "T_ref": "20 degC", "T": "20 degC"}
+    raw["friction"]["v"] = ["1e-3 m/s"]
+    path = write_scene(raw)
+    out = tmp_path / "out"
+    assert main(["run", str(path), "--outdir", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert "curve.txt" in err and "line 3" in err
+    assert not out.exists() or not list(out.rglob("*.nc"))
