@@ -194,13 +194,24 @@ def producer_of(variable: str) -> Stage:
     all_stages = stages()
     if variable in all_stages:
         return all_stages[variable]
-    for st in all_stages.values():
-        if variable in st.outputs:
-            return st
+    candidates = [st for st in all_stages.values() if variable in st.outputs]
+    if candidates:  # a variable several stages output (E_star, say): the cheapest, nearest the inputs
+        return min(candidates, key=lambda st: (len(_upstream_closure(st, all_stages)), st.name))
     known = sorted(set(all_stages) | {v for s in all_stages.values() for v in s.outputs})
     from .schema import did_you_mean
 
     raise UserError(f"no stage produces {variable!r}{did_you_mean(variable, known)}", key="outputs.variables")
+
+
+def _upstream_closure(st: Stage, all_stages: dict[str, Stage]) -> set[str]:
+    seen: set[str] = set()
+    todo = list(st.requires)
+    while todo:
+        name = todo.pop()
+        if name not in seen:
+            seen.add(name)
+            todo.extend(all_stages[name].requires)
+    return seen
 
 
 def _load_plugins() -> None:

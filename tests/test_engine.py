@@ -172,3 +172,9 @@ def test_a_bad_input_file_of_a_later_stage_writes_nothing_at_all(tmp_path, capsy
     err = capsys.readouterr().err
     assert "curve.txt" in err and "line 3" in err
     assert not out.exists() or not list(out.rglob("*.nc"))
+
+
+def test_a_variable_several_stages_output_comes_from_the_cheapest():
+    from pipeline.stage import producer_of
+
+    assert producer_of("E_star").name == "contact"  # not separation or bem, which need more upstream
