@@ -805,7 +805,7 @@ def figure_bem_comparison(results):
 register(
     Stage(
         name="bem",
-        version="1",
+        version="2",
         compute=compute_bem,
         validate=validate_bem,
         requires=("psd", "contact", "separation"),
