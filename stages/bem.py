@@ -25,9 +25,16 @@ Grid <-> q band (the comparison uses the same band on both sides):
 * the theory is read at magnification zeta_bem = q_cut / qL, which the scene must list in
   ``contact.zeta`` (the stage says which value when it is missing).
 
-Measured topographies: :func:`contact_pair` takes any two height maps on one grid (pixel size
-dx, same shape); a ``kind = "topography"`` surface pair can be compared by passing its two
-maps there instead of the output of :func:`synthesize_pair` (see docs/bem.md).
+Measured topographies (``bem.surfaces``, default "auto"): when every rough surface is a
+``kind = "topography"`` surface given as one periodic, square area map (both on the same grid
+when both are rough), the stage solves on those maps instead of synthesizing: the topography
+stage's preprocessing (units, sizes, detrending; never a window), the composite h1 - h2 as
+above, one "realization". The band is the map's: qL = 2 pi / L (L the map's side, which must be
+the psd grid's lowest wavenumber), q_cut = min(q_max of the psd grid, the maps' reliability
+cutoff, N qL / pixels_per_wavelength); modes above q_cut are removed from the maps
+(:func:`band_limit`), and the theory is read at zeta_bem = q_cut / qL (:func:`map_band`).
+With two measured surfaces, eta must be "measured" (the maps have their own coherence); the
+outputs then have no eta dimension. See docs/bem.md.
 """
 
 from __future__ import annotations
@@ -37,10 +44,11 @@ import xarray as xr
 
 from pipeline.errors import UserError
 from pipeline.schema import Param, Section
-from pipeline.stage import Figure, Stage, StageInput, Var, register, register_params, register_section
+from pipeline.stage import FileInput, Figure, Stage, StageInput, Var, register, register_params, register_section
 
 from .contact import effective_modulus
 from .quadrature import loglog_interp
+from .topography import _prepare, _process, is_topography
 
 #: the optional dependency and how to install it (named in the error without it)
 EXTRA = 'pip install "roughcontact[bem]"'
@@ -218,6 +226,60 @@ def rms_slope_of_map(h, pixel_size):
     return float(np.sqrt(np.sum(weight * q * q * np.abs(H) ** 2)))
 
 
+def band_limit(h, pixel_size, q_cut):
+    """A periodic square map (m) with its mean and every Fourier mode |q| > q_cut removed.
+
+    The measured-map counterpart of the synthesis band qL <= |q| <= q_cut: the lattice of an
+    n x n map of side L = n dx has no mode between 0 and qL = 2 pi / L, so keeping
+    0 < |q| <= q_cut (1/m) leaves exactly the band the theory integrates over. Modes on the
+    edge (|q| = q_cut to 1e-12) are kept.
+    """
+    h = np.asarray(h, dtype=float)
+    n = h.shape[0]
+    if h.shape != (n, n):
+        raise ValueError(f"band_limit needs a square map, got shape {h.shape}")
+    H = np.fft.rfft2(h)
+    q = lattice_wavenumbers(n, pixel_size)
+    H[(q == 0.0) | (q > q_cut * (1 + 1e-12))] = 0.0
+    return np.fft.irfft2(H, s=(n, n))
+
+
+def map_band(q_grid_lo, q_grid_hi, n, side, q_reliable, pixels_per_wavelength):
+    """The band of a measured n x n periodic map of side ``side`` (m), matched to the psd grid.
+
+    The map's lattice starts at qL = 2 pi / side, which must be the psd grid's lowest
+    wavenumber ``q_grid_lo`` (the topography stage's lowest bin holds only the modes |q| = qL,
+    so it is, unless ``grid.q_min`` moves it); the theory integrates from there.
+    zeta_bem = min(q_grid_hi / qL, q_reliable / qL, n / pixels_per_wavelength) and
+    q_cut = zeta_bem qL: the psd grid's top, the maps' reliability cutoff (Nyquist pi / dx or
+    the instrument cutoffs) and the same pixels-per-wavelength rule as the synthesis path
+    (n qL / 2 is the Nyquist wavenumber, so pixels_per_wavelength = 2 keeps up to it).
+
+    Returns
+    -------
+    q_cut : float
+        Highest wavenumber kept (1/m).
+    zeta_bem : float
+        q_cut / qL.
+    limit : str
+        What set q_cut.
+    """
+    qL = 2.0 * np.pi / side
+    if not np.isclose(q_grid_lo, qL, rtol=1e-9, atol=0.0):
+        raise UserError(
+            f"the measured maps' lowest wavenumber is 2 pi / L = {qL:.10g} 1/m (L = {side:.6g} m) but the psd "
+            f"grid starts at {q_grid_lo:.10g} 1/m; the BEM solves on the whole periodic map, so the theory must "
+            f"start at 2 pi / L: remove grid.q_min (or set it to {qL:.10g} 1/m)", key="grid.q_min")
+    options = ((q_grid_hi / q_grid_lo, "the top of the psd grid"),
+               (q_reliable / qL, "the maps' reliability cutoff"),
+               (n / float(pixels_per_wavelength), f"{n} pixels / bem.pixels_per_wavelength"))
+    zeta, limit = min(options, key=lambda o: o[0])
+    if zeta <= 1.0:
+        raise UserError(f"the measured maps resolve no band above 2 pi / L (zeta_bem = {zeta:.4g}, set by {limit})",
+                        key="bem.pixels_per_wavelength")
+    return zeta * q_grid_lo, zeta, limit
+
+
 # ----------------------------------------------------------------------------------------
 # Kernels: the contact solve (Tamaas, imported lazily)
 # ----------------------------------------------------------------------------------------
@@ -348,11 +410,17 @@ register_section(
     Section(
         "bem",
         (
-            Param("grid", "int", default=256, lo=8, hi=8192, doc="pixels per side of the periodic map (side L = 2 pi / qL)"),
-            Param("realizations", "int", default=4, lo=1, hi=10000, doc="number of random surface pairs"),
+            Param("grid", "int", default=256, lo=8, hi=8192,
+                  doc="pixels per side of the synthesized periodic map (side L = 2 pi / qL; measured maps keep theirs)"),
+            Param("realizations", "int", default=4, lo=1, hi=10000,
+                  doc="number of random surface pairs (measured maps: one)"),
             Param("seed", "int", default=0, lo=0, doc="random seed (results are reproducible for a given seed)"),
             Param("pixels_per_wavelength", "quantity", "", default=4.0, lo=2.0,
                   doc="pixels per shortest wavelength kept: q_cut = min(q_max, grid qL / this); 2 = Nyquist"),
+            Param("surfaces", "choice", default="auto", choices=("auto", "synthesized", "measured"),
+                  doc="auto: solve on the measured maps when every rough surface is a topography (one periodic "
+                      "square map each, one grid), else synthesize; synthesized: always random surfaces with the "
+                      "psd stage's spectra; measured: the maps or an error"),
         ),
         doc="the boundary-element check (needs the [bem] extra: tamaas)",
     )
@@ -381,7 +449,7 @@ def grid_band(q_lowest, q_highest, n, pixels_per_wavelength):
     return L, L / n, q_cut, q_cut / q_lowest
 
 
-def _at_zeta(ds: xr.Dataset, var: str, zeta: float, stage: str) -> xr.DataArray:
+def _at_zeta(ds: xr.Dataset, var: str, zeta: float, stage: str, set_by: str) -> xr.DataArray:
     da = ds[var]
     if "zeta" not in da.dims and "zeta" not in da.coords:
         return da
@@ -390,14 +458,118 @@ def _at_zeta(ds: xr.Dataset, var: str, zeta: float, stage: str) -> xr.DataArray:
     if hit.size == 0:
         raise UserError(
             f"the {stage} stage has no magnification zeta = {zeta:.10g}, the band the BEM map resolves "
-            f"(q_cut / qL, see bem.grid and bem.pixels_per_wavelength); add {zeta:.10g} to contact.zeta",
-            key="contact.zeta")
+            f"(q_cut / qL, set by {set_by}); add {zeta:.10g} to contact.zeta", key="contact.zeta")
     return da.isel(zeta=int(hit[0])) if "zeta" in da.dims else da
 
 
+_SYNTHESIZE_INSTEAD = "; or set bem.surfaces = 'synthesized' to compare on random periodic surfaces with the measured spectra"
+
+
+def _rough(spec) -> bool:
+    return spec is not None and spec.get("kind") != "smooth"
+
+
+def map_surfaces(inp: StageInput) -> tuple[str, ...]:
+    """The rough surfaces whose measured maps the BEM solves on; () means synthesize.
+
+    ``bem.surfaces``: "synthesized" always synthesizes; "auto" (default) uses the maps when
+    every rough surface is of kind "topography"; "measured" requires that.
+    """
+    how = inp["bem.surfaces"]
+    rough = tuple(name for name in ("substrate", "solid") if _rough(inp[name]))
+    if how == "synthesized":
+        return ()
+    if rough and all(is_topography(inp[name]) for name in rough):
+        return rough
+    if how == "measured":
+        raise UserError("bem.surfaces = 'measured' needs every rough surface to be of kind 'topography' (an area "
+                        "map); use 'auto' or 'synthesized' for self_affine or psd_file surfaces", key="bem.surfaces")
+    return ()
+
+
+def measured_maps(inp: StageInput, names: tuple[str, ...]) -> dict:
+    """The measured maps the BEM solves on, prepared as the topography stage prepares them.
+
+    Per surface: exactly one file, an area map (not a line scan, ``analysis = "area"``),
+    periodic (``periodic = true`` or the file says so), no window, square (same number of
+    points and the same length along x and y); both surfaces on the same grid. Units, sizes,
+    missing points and detrending are the topography stage's (:func:`stages.topography._prepare`
+    and ``_process`` with the window switched off: a window would change the heights the
+    solver sees). Bad input is a :class:`UserError` naming the key.
+
+    Returns
+    -------
+    dict with ``h`` (name -> detrended heights, m), ``n`` (pixels per side), ``side`` (m),
+    ``pixel_size`` (m), ``q_reliable`` (1/m, the lowest of the maps' cutoffs), ``cutoff``
+    (what set it) and ``files`` (name -> path).
+    """
+    prepared = {}
+    for name in names:
+        spec, key = inp[name], f"{name}.files"
+        files = inp.files.get(key)
+        files = [] if files is None else list(files) if isinstance(files, (list, tuple)) else [files]
+        if len(files) != 1:
+            raise UserError(f"the BEM solves on one map per surface; the {name} has {len(files)} files"
+                            + _SYNTHESIZE_INSTEAD, key=key)
+        p = _prepare(name, spec, files[0], 0)
+        path = p["path"]
+        if p["h"].ndim != 2:
+            raise UserError("a line scan; the BEM needs an area map (a 2D height map)" + _SYNTHESIZE_INSTEAD,
+                            file=path, key=key)
+        if p["analysis"] != "area":
+            raise UserError("the BEM compares with the map's 2D spectrum: set analysis = 'area'" + _SYNTHESIZE_INSTEAD,
+                            file=path, key=f"{name}.analysis")
+        if not p["periodic"]:
+            raise UserError(
+                "the map is not periodic and the FFT-BEM solves on a periodic cell: set periodic = true to use it "
+                "as periodic (the step between opposite edges then adds roughness at all wavenumbers, to the "
+                "measured PSD as well, which is then computed without a window)" + _SYNTHESIZE_INSTEAD,
+                file=path, key=f"{name}.periodic")
+        if p["window"] != "none":
+            raise UserError("the BEM solves on the heights as they are; a windowed PSD would not describe them: "
+                            "remove window (or set it to 'none')", file=path, key=f"{name}.window")
+        (nx, ny), (sx, sy) = p["h"].shape, p["sizes"]
+        if nx != ny or not np.isclose(sx, sy, rtol=1e-6):
+            raise UserError(f"the BEM needs a square map (same points and length along x and y); this one has "
+                            f"{nx} x {ny} points over {sx:.6g} m x {sy:.6g} m: crop it to a square" + _SYNTHESIZE_INSTEAD,
+                            file=path, key=key)
+        prepared[name] = _process(dict(p, window="none"), spec)
+    if len(prepared) == 2:
+        a, b = prepared["substrate"], prepared["solid"]
+        if a["h"].shape != b["h"].shape:
+            raise UserError(f"the two maps are not on one grid: the substrate has {a['h'].shape[0]} x {a['h'].shape[1]} "
+                            f"points, the solid {b['h'].shape[0]} x {b['h'].shape[1]}" + _SYNTHESIZE_INSTEAD,
+                            key="solid.files")
+        if not np.isclose(a["sizes"][0], b["sizes"][0], rtol=1e-6):
+            raise UserError(f"the two maps are not on one grid: the substrate is {a['sizes'][0]:.6g} m wide, the solid "
+                            f"{b['sizes'][0]:.6g} m" + _SYNTHESIZE_INSTEAD, key="solid.size_x")
+    first = prepared[names[0]]
+    low = min(prepared.values(), key=lambda p: p["q_max"])
+    n, side = first["h"].shape[0], first["sizes"][0]
+    return {"h": {name: p["h"] for name, p in prepared.items()}, "n": n, "side": side, "pixel_size": side / n,
+            "q_reliable": low["q_max"], "cutoff": low["cutoff"],
+            "files": {name: p["path"] for name, p in prepared.items()},
+            "detrend": {name: p["detrend"] for name, p in prepared.items()}}
+
+
+def _check_eta(inp: StageInput, names: tuple[str, ...]) -> None:
+    measured = isinstance(inp["interface.eta"], str)
+    if len(names) == 2 and not measured:
+        raise UserError("the BEM solves on the two measured maps, which have their own coherence: set "
+                        "interface.eta = 'measured' so that the theory uses it too" + _SYNTHESIZE_INSTEAD
+                        + " and the given eta", key="interface.eta")
+    if not names and measured and _rough(inp["substrate"]) and _rough(inp["solid"]):
+        raise UserError("synthesized BEM surfaces are mixed with one coherence: give numeric interface.eta values, "
+                        "or solve on the measured maps (bem.surfaces = 'auto')", key="interface.eta")
+
+
 def validate_bem(inp: StageInput) -> None:
-    """Before anything computes: the optional dependency must be there."""
+    """Before anything computes: the optional dependency must be there, and measured maps usable."""
     _tamaas()
+    names = map_surfaces(inp)
+    _check_eta(inp, names)
+    if names:
+        measured_maps(inp, names)
 
 
 def compute_bem(inp: StageInput) -> xr.Dataset:
@@ -411,18 +583,37 @@ def compute_bem(inp: StageInput) -> xr.Dataset:
                             key=f"{section}.hrms")
     C1, C2 = psd["psd_substrate"].values, psd["psd_solid"].values
     E_star = float(effective_modulus(inp["material.E"], inp["material.nu"]))
-    n, R, seed = inp["bem.grid"], inp["bem.realizations"], inp["bem.seed"]
-    L, dx, q_cut, zeta_bem = grid_band(q[0], q[-1], n, inp["bem.pixels_per_wavelength"])
+    names = map_surfaces(inp)
+    _check_eta(inp, names)
+    n_w = inp["bem.pixels_per_wavelength"]
+    if names:  # measured maps: the map sets the grid and the band; one "realization"
+        maps = measured_maps(inp, names)
+        n, R, seed, dx = maps["n"], 1, None, maps["pixel_size"]
+        L = maps["side"]
+        q_cut, zeta_bem, limit = map_band(q[0], q[-1], n, L, maps["q_reliable"], n_w)
+        if limit == "the maps' reliability cutoff":
+            limit += f" ({maps['cutoff']})"
+        zero = np.zeros((n, n))
+        h_maps = {name: band_limit(maps["h"].get(name, zero), dx, q_cut) for name in ("substrate", "solid")}
+    else:
+        n, R, seed = inp["bem.grid"], inp["bem.realizations"], inp["bem.seed"]
+        L, dx, q_cut, zeta_bem = grid_band(q[0], q[-1], n, n_w)
+        limit = "bem.grid and bem.pixels_per_wavelength"
     contact, separation = inp.upstream["contact"], inp.upstream["separation"]
-    G = _at_zeta(contact, "G", zeta_bem, "contact")
-    theory_area = _at_zeta(contact, "contact_area_ratio", zeta_bem, "contact")
-    theory_gap = _at_zeta(separation, "mean_separation", zeta_bem, "separation")
+    G = _at_zeta(contact, "G", zeta_bem, "contact", limit)
+    theory_area = _at_zeta(contact, "contact_area_ratio", zeta_bem, "contact", limit)
+    theory_gap = _at_zeta(separation, "mean_separation", zeta_bem, "separation", limit)
 
     p_values = np.atleast_1d(np.asarray(inp["load.p"], dtype=float))
     has_eta = "eta" in psd["psd_combined"].dims
-    eta_values = psd["eta"].values if has_eta else np.atleast_1d(float(np.atleast_1d(inp["interface.eta"])[0]))
-    if not has_eta and not (np.any(C1 > 0) and np.any(C2 > 0)):
-        eta_values = np.array([0.0])  # one surface is smooth: eta has no effect
+    if names or isinstance(inp["interface.eta"], str):
+        eta_values = np.array([np.nan])  # measured: eta(q) is in the maps (and in the theory's combined PSD)
+    elif has_eta:
+        eta_values = psd["eta"].values
+    else:
+        eta_values = np.atleast_1d(float(np.atleast_1d(inp["interface.eta"])[0]))
+        if not (np.any(C1 > 0) and np.any(C2 > 0)):
+            eta_values = np.array([0.0])  # one surface is smooth: eta has no effect
     eta_values = np.atleast_1d(eta_values)
     nb = inp["numerics.bem_stress_bins"]
     level = (np.arange(nb) + 0.5) / nb
@@ -432,32 +623,41 @@ def compute_bem(inp: StageInput) -> xr.Dataset:
     top = np.where(top > p_values[:, None], top, 2.0 * p_values[:, None])
     edges = np.linspace(0.0, 1.0, nb + 1) * top[..., None]  # (p, eta, nb + 1)
 
+    def pairs():
+        """(eta index, realization, h1, h2) of every map pair to solve on."""
+        if names:
+            yield 0, 0, h_maps["substrate"], h_maps["solid"]
+            return
+        for r in range(R):
+            noise = white_noise_pair(n, seed, r, band=zeta_bem)
+            for j, eta in enumerate(eta_values):
+                yield (j, r) + synthesize_pair(q, C1, C2, eta, n, q_cut, noise=noise)
+
     shape = (p_values.size, eta_values.size, R)
     area, gap, overflow = np.empty(shape), np.empty(shape), np.empty(shape)
     hist = np.empty(shape + (nb,))
     hrms, slope = np.empty(shape[1:]), np.empty(shape[1:])
     order = np.argsort(p_values)  # increasing load: each solve starts from the previous one
-    for r in range(R):
-        noise = white_noise_pair(n, seed, r, band=zeta_bem)
-        for j, eta in enumerate(eta_values):
-            h1, h2 = synthesize_pair(q, C1, C2, eta, n, q_cut, noise=noise)
-            hrms[j, r] = float(np.std(h1 - h2))
-            slope[j, r] = rms_slope_of_map(h1 - h2, dx)
-            res = contact_pair(h1, h2, dx, E_star, p_values[order], tolerance=inp["numerics.bem_tolerance"],
-                               stress_edges=edges[order, j])
-            area[order, j, r] = res["area"]
-            gap[order, j, r] = res["mean_gap"]
-            hist[order, j, r] = res["histogram"]
-            overflow[order, j, r] = res["overflow"]
+    for j, r, h1, h2 in pairs():
+        hrms[j, r] = float(np.std(h1 - h2))
+        slope[j, r] = rms_slope_of_map(h1 - h2, dx)
+        res = contact_pair(h1, h2, dx, E_star, p_values[order], tolerance=inp["numerics.bem_tolerance"],
+                           stress_edges=edges[order, j])
+        area[order, j, r] = res["area"]
+        gap[order, j, r] = res["mean_gap"]
+        hist[order, j, r] = res["histogram"]
+        overflow[order, j, r] = res["overflow"]
 
     dims = ("p", "eta", "realization")
     coords = {
         "p": ("p", p_values, {"units": "Pa", "long_name": "nominal pressure"}),
         "eta": ("eta", eta_values, {"units": "1", "long_name": "coherence of the two surfaces' roughness"}),
-        "realization": ("realization", np.arange(R), {"units": "1", "long_name": "index of the random surface pair"}),
+        "realization": ("realization", np.arange(R), {"units": "1", "long_name": (
+            "index of the surface pair (0: the measured maps)" if names else "index of the random surface pair")}),
         "bem_stress_level": ("bem_stress_level", level,
                              {"units": "1", "long_name": "histogram bin centre, sigma / (p + sigma_width sqrt(G))"}),
     }
+    what = "measured" if names else "synthesized"
     band = {"bem_zeta": zeta_bem, "bem_q_cut": q_cut, "bem_system_size": L, "bem_pixel_size": dx, "bem_grid": n}
     ds = xr.Dataset(coords=coords)
     ds = ds.assign_coords(bem_sigma=(("p", "eta", "bem_stress_level"), level * top[..., None],
@@ -471,16 +671,16 @@ def compute_bem(inp: StageInput) -> xr.Dataset:
     ds["bem_stress_overflow"] = (dims, overflow, {
         "units": "1", "long_name": "fraction of the map in contact at pressures beyond the last histogram bin"})
     ds["bem_hrms_combined"] = (("eta", "realization"), hrms, {
-        "units": "m", "long_name": "rms height of the synthesized composite h1 - h2"})
+        "units": "m", "long_name": f"rms height of the {what} composite h1 - h2 in the BEM band"})
     ds["bem_rms_slope_combined"] = (("eta", "realization"), slope, {
-        "units": "1", "long_name": "rms slope of the synthesized composite h1 - h2"})
+        "units": "1", "long_name": f"rms slope of the {what} composite h1 - h2 in the BEM band"})
     ddof = 1 if R > 1 else 0
-    for var, unit, what in (("bem_contact_area_ratio", "1", "relative contact area"),
+    for var, unit, text in (("bem_contact_area_ratio", "1", "relative contact area"),
                             ("bem_mean_gap", "m", "mean interfacial separation")):
         ds[f"{var}_mean"] = ds[var].mean("realization").assign_attrs(
-            units=unit, long_name=f"BEM {what}, mean over realizations")
+            units=unit, long_name=f"BEM {text}, mean over realizations")
         ds[f"{var}_std"] = ds[var].std("realization", ddof=ddof).assign_attrs(
-            units=unit, long_name=f"BEM {what}, standard deviation over realizations"
+            units=unit, long_name=f"BEM {text}, standard deviation over realizations"
                                   + ("" if R > 1 else " (0: a single realization)"))
     t_area = _on(theory_area, p_values, eta_values, has_eta)
     t_gap = _on(theory_gap, p_values, eta_values, has_eta)
@@ -499,15 +699,24 @@ def compute_bem(inp: StageInput) -> xr.Dataset:
     ds["E_star"] = xr.DataArray(E_star, attrs={"units": "Pa", "long_name": "effective modulus E* = E/(1 - nu^2)"})
     ds.attrs.update({
         "bem_solver": f"tamaas {_tamaas().__version__} PolonskyKeerRey, tolerance {inp['numerics.bem_tolerance']:g}",
-        "bem_grid_mapping": f"map side L = 2 pi / qL = {L:.6g} m, {n} x {n} pixels of dx = {dx:.6g} m; "
-                            f"roughness on qL <= |q| <= q_cut = {q_cut:.6g} 1/m (zeta_bem = {zeta_bem:.6g}); "
-                            f"theory read at the same zeta",
-        "bem_synthesis": "H1 = (2 pi/L) sqrt(C1) xi1, H2 = (2 pi/L) sqrt(C2) (eta xi1 + sqrt(1 - eta^2) xi2), "
-                         "xi = rfft2(white noise)/m on the smallest grid m holding the band (so a finer grid gives the same "
-                         "surface), from numpy.random.default_rng([seed, realization]); "
-                         "the same noise for every eta of a realization",
-        "bem_seed": int(seed),
+        "bem_surfaces": what,
+        "bem_grid_mapping": f"map side L = {'the measured maps side' if names else '2 pi / qL'} = {L:.6g} m, "
+                            f"{n} x {n} pixels of dx = {dx:.6g} m; roughness on 2 pi / L <= |q| <= q_cut = {q_cut:.6g} 1/m "
+                            f"(set by {limit}; zeta_bem = {zeta_bem:.6g}); theory read at the same zeta",
     })
+    if names:
+        ds.attrs["bem_maps"] = (
+            "; ".join(f"{name}: {maps['files'][name]} (detrend {maps['detrend'][name]})" for name in names)
+            + "; composite h1 - h2 (substrate minus solid, both heights upwards in one frame, as for the measured "
+              f"coherence), modes above q_cut and the mean removed; one realization")
+    else:
+        ds.attrs.update({
+            "bem_synthesis": "H1 = (2 pi/L) sqrt(C1) xi1, H2 = (2 pi/L) sqrt(C2) (eta xi1 + sqrt(1 - eta^2) xi2), "
+                             "xi = rfft2(white noise)/m on the smallest grid m holding the band (so a finer grid gives "
+                             "the same surface), from numpy.random.default_rng([seed, realization]); "
+                             "the same noise for every eta of a realization",
+            "bem_seed": int(seed),
+        })
     if not has_eta:
         ds = ds.isel(eta=0, drop=True)
     if np.ndim(inp["load.p"]) == 0:
@@ -517,7 +726,7 @@ def compute_bem(inp: StageInput) -> xr.Dataset:
 
 _BAND_NAMES = {
     "bem_zeta": "magnification resolved by the BEM map, q_cut / qL (the theory is read there)",
-    "bem_q_cut": "highest wavenumber of the synthesized roughness",
+    "bem_q_cut": "highest wavenumber of the roughness in the BEM map",
     "bem_system_size": "side of the periodic map, 2 pi / qL",
     "bem_pixel_size": "pixel size of the map",
     "bem_grid": "pixels per side of the map",
@@ -545,6 +754,8 @@ def figure_bem_comparison(results):
 
     ds = results["base"]["bem"]
     E_star = float(ds["E_star"])
+    measured = ds.attrs.get("bem_surfaces") == "measured"
+    zeta_bem, grid = float(ds["bem_zeta"]), int(ds["bem_grid"])  # scalars, before eta/p are expanded
     if "eta" not in ds.dims:
         ds = ds.expand_dims(eta=[np.nan])
     if "p" not in ds.dims:
@@ -553,8 +764,9 @@ def figure_bem_comparison(results):
     x = ds["p"].values / E_star
     for k, eta in enumerate(ds["eta"].values):
         d = ds.isel(eta=k)
-        label = "pair" if np.isnan(eta) else f"eta = {eta:+g}".replace("+0", "0")
-        if np.all(d["bem_hrms_combined"].values == 0):
+        label = (("measured maps" if measured else "pair") if np.isnan(eta)
+                 else f"eta = {eta:+g}".replace("+0", "0"))
+        if np.all(np.asarray(d["bem_hrms_combined"].values) == 0):
             label += " (h1 = h2: full contact)"
         color = f"C{k}"
         axes[0].loglog(x, d["theory_contact_area_ratio"], "-", color=color, label=f"theory, {label}")
@@ -572,7 +784,8 @@ def figure_bem_comparison(results):
     axes[0].set_title("contact area: theory (lines), BEM (points)", fontsize=9)
     axes[1].set_ylabel("mean separation u (nm)")
     axes[1].set_ylim(bottom=0)
-    axes[1].set_title("mean separation (error bars: spread over realizations)", fontsize=9)
+    axes[1].set_title("mean separation" + (" (one measured pair)" if measured else
+                                           " (error bars: spread over realizations)"), fontsize=9)
     axes[2].axhline(1.0, color="0.5", linewidth=0.8)
     axes[2].set_ylabel("theory / BEM")
     axes[2].set_title("ratios, same band on both sides", fontsize=9)
@@ -582,8 +795,9 @@ def figure_bem_comparison(results):
         ax.set_xlabel("p / E*")
         ax.grid(alpha=0.3)
     R = ds.sizes.get("realization", 1)
-    fig.suptitle(f"Theory vs BEM at zeta = {float(ds['bem_zeta']):.4g}: {int(ds['bem_grid'])}^2 map, "
-                 f"{R} realization{'s' if R > 1 else ''}, seed {ds.attrs.get('bem_seed', '?')}")
+    source = ("the measured maps" if measured else
+              f"{R} realization{'s' if R > 1 else ''}, seed {ds.attrs.get('bem_seed', '?')}")
+    fig.suptitle(f"Theory vs BEM at zeta = {zeta_bem:.4g}: {grid}^2 map, {source}")
     fig.tight_layout()
     return fig
 
@@ -591,20 +805,22 @@ def figure_bem_comparison(results):
 register(
     Stage(
         name="bem",
-        version="1",
+        version="2",
         compute=compute_bem,
         validate=validate_bem,
         requires=("psd", "contact", "separation"),
-        params=("material.E", "material.nu", "load.p", "interface.eta", "bem.grid", "bem.realizations", "bem.seed",
-                "bem.pixels_per_wavelength", "numerics.bem_tolerance", "numerics.bem_stress_bins",
-                "numerics.sigma_width"),
+        params=("material.E", "material.nu", "load.p", "interface.eta", "substrate", "solid", "bem.surfaces",
+                "bem.grid", "bem.realizations", "bem.seed", "bem.pixels_per_wavelength", "numerics.bem_tolerance",
+                "numerics.bem_stress_bins", "numerics.sigma_width"),
+        # measured maps (kind = "topography"): the engine reads them; used when bem.surfaces allows
+        files=(FileInput("substrate.files", reader="topography"), FileInput("solid.files", reader="topography")),
         outputs={
             "bem_contact_area_ratio": Var("1", "relative contact area from the BEM, per realization"),
             "bem_mean_gap": Var("m", "mean interfacial separation from the BEM, per realization"),
             "bem_stress_histogram": Var("1/Pa", "BEM density of the local contact pressure"),
             "bem_stress_overflow": Var("1", "fraction of the map in contact beyond the histogram"),
-            "bem_hrms_combined": Var("m", "rms height of the synthesized composite"),
-            "bem_rms_slope_combined": Var("1", "rms slope of the synthesized composite"),
+            "bem_hrms_combined": Var("m", "rms height of the composite in the BEM band"),
+            "bem_rms_slope_combined": Var("1", "rms slope of the composite in the BEM band"),
             "bem_contact_area_ratio_mean": Var("1", "BEM relative contact area, mean over realizations"),
             "bem_contact_area_ratio_std": Var("1", "BEM relative contact area, standard deviation"),
             "bem_mean_gap_mean": Var("m", "BEM mean separation, mean over realizations"),
@@ -623,12 +839,12 @@ register(
         coords={
             "p": Var("Pa", "nominal pressure"),
             "eta": Var("1", "coherence of the two surfaces' roughness"),
-            "realization": Var("1", "index of the random surface pair"),
+            "realization": Var("1", "index of the surface pair"),
             "bem_stress_level": Var("1", "histogram bin centre, sigma / (p + sigma_width sqrt(G))"),
             "bem_sigma": Var("Pa", "local contact pressure at each histogram bin centre"),
         },
         figures=(Figure("bem_comparison", "theory vs BEM: A/A0, mean separation and their ratios",
                         ("bem",), figure_bem_comparison),),
-        doc="Exact FFT-BEM contact (tamaas) on synthesized surface pairs, compared with the theory at the same band.",
+        doc="Exact FFT-BEM contact (tamaas) on synthesized or measured surface pairs, compared with the theory at the same band.",
     )
 )

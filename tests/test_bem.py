@@ -1,10 +1,12 @@
-"""Tests of the bem stage: FFT boundary-element contact on synthesized surface pairs.
+"""Tests of the bem stage: FFT boundary-element contact on synthesized or measured surface pairs.
 
 The synthesis tests need numpy only; those that solve contact skip without tamaas (the
 optional extra ``roughcontact[bem]``). Each test checks a fact: Westergaard's solution for a
 sinusoid, the coherence and rms roughness of the synthesized pair against their definitions,
 grid convergence of the mean gap, the exact scaling of linear elasticity, load balance of the
-pressure histogram, reproducibility, and the known bias of the theory's contact area.
+pressure histogram, reproducibility, and the known bias of the theory's contact area; for
+measured maps (kind = "topography"): the stage's result is the solver's on the same arrays,
+identical maps fit, the map's band is the theory's, and unusable maps are clear errors.
 """
 
 from __future__ import annotations
@@ -20,11 +22,13 @@ from pipeline import cli
 from pipeline.errors import UserError
 from stages.bem import (
     EXTRA,
+    band_limit,
     contact_pair,
     figure_bem_comparison,
     fourier_refine,
     grid_band,
     lattice_wavenumbers,
+    map_band,
     pair_coherence,
     psd_on_lattice,
     solve_contact,
@@ -388,3 +392,210 @@ def test_hrms_sweep_is_refused(run_scene):
     surface = {"kind": "self_affine", "H": 0.8, "qL": "2e8 1/m", "q1": "4e10 1/m", "hrms": ["1 nm", "2 nm"]}
     with pytest.raises(UserError, match="does not sweep"):
         run_scene(bem_scene(substrate=surface))
+
+
+# ----------------------------------------------------------------------------------------
+# measured maps (kind = "topography"): the stage solves on the maps themselves
+# ----------------------------------------------------------------------------------------
+
+SIDE = 10e-6  # m: the maps' side, so qL = 2 pi / SIDE
+E_SOFT = "10 MPa"  # nu = 0.5: E* = 13.3 MPa
+
+
+def measured_pair(n=64, q_cut=16.0, eta=0.5, seed=3):
+    """Two periodic maps (m) on an n x n grid of side SIDE with roughness only up to q_cut qL
+    (so the stage's band limit at n / pixels_per_wavelength = q_cut qL removes nothing)."""
+    h1, h2 = synthesize_pair(Q, C_SHAPE, 0.5 * C_SHAPE, eta, n, q_cut, seed=seed)
+    scale = 50e-9 / np.std(h1)
+    return h1 * scale, h2 * scale
+
+
+def topo_scene(tmp_path, h1, h2, **over):
+    """A scene whose two surfaces are the .npy maps h1, h2 (heights in m, side SIDE, periodic)."""
+    np.save(tmp_path / "h1.npy", h1)
+    np.save(tmp_path / "h2.npy", h2)
+    surface = {"kind": "topography", "height_unit": "m", "size_x": f"{SIDE * 1e6:g} um", "periodic": True}
+    raw = {
+        "substrate": {**surface, "files": [str(tmp_path / "h1.npy")]},
+        "solid": {**surface, "files": [str(tmp_path / "h2.npy")]},
+        "interface": {"eta": "measured"},
+        "material": {"E": E_SOFT, "nu": 0.5},
+        "load": {"p": ["20 kPa", "100 kPa", "500 kPa"]},
+        "contact": {"zeta": [16.0]},
+        "bem": {"pixels_per_wavelength": 4},
+        "outputs": {"variables": ["bem_contact_area_ratio"]},
+    }
+    for k, v in over.items():
+        raw[k] = {**raw.get(k, {}), **v} if isinstance(v, dict) and "kind" not in v else v
+    return raw
+
+
+def test_band_limit_keeps_the_band_and_removes_the_rest():
+    """band_limit removes the mean and every mode |q| > q_cut and leaves the modes below
+    unchanged (to rounding); a map already inside the band is returned as it was."""
+    n, dx = 32, 2 * np.pi / 32
+    rng = np.random.default_rng(1)
+    h = 3.0 + rng.standard_normal((n, n))
+    out = band_limit(h, dx, 6.0)
+    H, G = np.fft.rfft2(h), np.fft.rfft2(out)
+    q = lattice_wavenumbers(n, dx)
+    keep = (q > 0) & (q <= 6.0)
+    np.testing.assert_allclose(G[keep], H[keep], rtol=1e-12, atol=1e-12 * np.abs(H).max())
+    assert np.abs(G[~keep]).max() < 1e-12 * np.abs(H).max()
+    inside, _ = synthesize_pair(Q, C_SHAPE, C_SHAPE, 0.0, n, 6.0, seed=2)
+    np.testing.assert_allclose(band_limit(inside, dx, 6.0), inside, rtol=0, atol=1e-13 * np.abs(inside).max())
+
+
+def test_map_band_matches_the_psd_grid():
+    """qL = 2 pi / L must be the psd grid's lowest wavenumber; q_cut is the lowest of the grid's
+    top, the maps' reliability cutoff and n qL / pixels_per_wavelength (2: the Nyquist pi/dx)."""
+    L, n = 1e-5, 64
+    qL = 2 * np.pi / L
+    assert map_band(qL, 30 * qL, n, L, np.pi * n / L, 4)[:2] == pytest.approx((16 * qL, 16))
+    q_cut, zeta, limit = map_band(qL, 30 * qL, n, L, np.pi * n / L, 2)
+    assert zeta == pytest.approx(30) and "psd grid" in limit  # Nyquist is 32 qL, the grid stops at 30 qL
+    q_cut, zeta, limit = map_band(qL, 30 * qL, n, L, 5 * qL, 4)
+    assert zeta == pytest.approx(5) and "reliability" in limit
+    with pytest.raises(UserError, match="psd grid starts at") as info:
+        map_band(1.5 * qL, 30 * qL, n, L, np.pi * n / L, 4)
+    assert info.value.key == "grid.q_min"
+
+
+def test_measured_maps_reproduce_the_solver_on_the_same_arrays(run_scene, tmp_path):
+    """Two maps given as topographies (npy files, heights in m) give, through the engine, the
+    result of contact_pair on the same arrays with the same pixel size, E* and histogram edges:
+    the stage adds nothing but the (here empty) band limit and the mean removal; the composite
+    is substrate minus solid (swapping them changes the result)."""
+    pytest.importorskip("tamaas")
+    pytest.importorskip("SurfaceTopography")
+    h1, h2 = measured_pair()
+    ds = run_scene(topo_scene(tmp_path, h1, h2))["base"]["bem"]
+    p = ds["p"].values
+    E_star = float(ds["E_star"])
+    assert E_star == pytest.approx(10e6 / 0.75)
+    assert float(ds["bem_pixel_size"]) == pytest.approx(SIDE / 64) and int(ds["bem_grid"]) == 64
+    nb = ds.sizes["bem_stress_level"]
+    top = ds["bem_sigma"].values[:, 0] * 2 * nb  # bin centres (k + 1/2) top / nb
+    edges = np.linspace(0.0, 1.0, nb + 1)[None, :] * top[:, None]
+    direct = contact_pair(h1, h2, SIDE / 64, E_star, p, tolerance=1e-10, stress_edges=edges)
+    np.testing.assert_array_equal(ds["bem_contact_area_ratio"].values[:, 0], direct["area"])
+    np.testing.assert_allclose(ds["bem_mean_gap"].values[:, 0], direct["mean_gap"], rtol=1e-9)
+    np.testing.assert_allclose(ds["bem_stress_histogram"].values[:, 0], direct["histogram"], rtol=1e-9, atol=0)
+    swapped = contact_pair(h2, h1, SIDE / 64, E_star, p, tolerance=1e-10)
+    assert not np.allclose(swapped["mean_gap"], direct["mean_gap"], rtol=1e-3, atol=0)
+
+
+def test_identical_measured_maps_are_in_full_contact(run_scene, tmp_path):
+    """The solid's map equal to the substrate's (one frame, heights upwards): the composite is
+    exactly 0, so full contact and zero gap at any pressure, on the BEM side and in the theory
+    (measured coherence 1, combined PSD 0)."""
+    pytest.importorskip("tamaas")
+    pytest.importorskip("SurfaceTopography")
+    h1, _ = measured_pair()
+    raw = topo_scene(tmp_path, h1, h1, load={"p": ["1 Pa", "1 kPa", "1 MPa", "1 GPa"]})
+    ds = run_scene(raw)["base"]["bem"]
+    assert np.all(ds["bem_contact_area_ratio"] == 1.0) and np.all(ds["bem_mean_gap"] == 0.0)
+    assert np.all(ds["bem_hrms_combined"] == 0.0)
+    assert np.all(ds["theory_contact_area_ratio"] == pytest.approx(1.0))
+    assert np.all(ds["theory_mean_separation"] == 0.0)
+
+
+def test_measured_path_through_the_engine_is_finite_and_in_one_band(run_scene, tmp_path):
+    """64 x 64 maps with roughness up to the Nyquist wavenumber, band-limited by the stage to
+    16 qL: no eta dimension (eta is measured), one realization; A/A0 in (0, 1] rising with p,
+    the mean gap falling and below the composite's peak-to-valley; finite ratios with the
+    theory's known bias (more BEM area); the composite's rms height equals the theory's
+    sqrt(2 pi int_qL^(zeta qL) q C dq) within 10 % (the same band on both sides: the theory
+    integrates log-log interpolated bin averages). The substrate-only variant (solid smooth)
+    solves on the substrate's map alone."""
+    pytest.importorskip("tamaas")
+    pytest.importorskip("SurfaceTopography")
+    from stages.quadrature import integral
+
+    h1, h2 = measured_pair(q_cut=32.0)
+    raw = topo_scene(tmp_path, h1, h2, variants={"substrate_only": {"solid": {"kind": "smooth"},
+                                                                    "interface": {"eta": 0.0}}})
+    res = run_scene(raw)
+    ds = res["base"]["bem"]
+    assert "eta" not in ds.dims and ds.sizes["realization"] == 1 and ds.attrs["bem_surfaces"] == "measured"
+    assert float(ds["bem_zeta"]) == pytest.approx(16.0) and float(ds["bem_system_size"]) == pytest.approx(SIDE)
+    area, gap = ds["bem_contact_area_ratio_mean"].values, ds["bem_mean_gap_mean"].values
+    assert np.all((area > 0) & (area <= 1)) and np.all(np.diff(area) > 0)
+    composite = band_limit(h1 - h2, SIDE / 64, 16 * 2 * np.pi / SIDE)
+    assert np.all((gap > 0) & (gap < np.ptp(composite))) and np.all(np.diff(gap) < 0)
+    hrms = ds["bem_hrms_combined"].item()
+    assert hrms == pytest.approx(np.std(composite), rel=1e-9)
+    for var in ("area_ratio_theory_to_bem", "separation_ratio_theory_to_bem"):
+        assert np.all(np.isfinite(ds[var].values)) and np.all((ds[var] > 0.2) & (ds[var] < 5)), ds[var].values
+    assert float(ds["area_ratio_theory_to_bem"].isel(p=0)) < 1.0
+    psd = res["base"]["psd"]
+    q, C = psd["q"].values, psd["psd_combined"].values
+    inside = q <= 16 * q[0] * (1 + 1e-9)
+    theory_hrms = np.sqrt(2 * np.pi * integral(q[inside], q[inside] * C[inside]))
+    assert hrms == pytest.approx(theory_hrms, rel=0.1)
+    alone = res["substrate_only"]["bem"]
+    assert "eta" not in alone.dims and alone.attrs["bem_surfaces"] == "measured"
+    assert alone["bem_hrms_combined"].item() == pytest.approx(np.std(band_limit(h1, SIDE / 64, 16 * 2 * np.pi / SIDE)),
+                                                             rel=1e-9)
+    fig = figure_bem_comparison(res)
+    assert "the measured maps" in fig._suptitle.get_text()
+
+
+@pytest.mark.parametrize("case, key, message", [
+    ("grids", "solid.files", r"not on one grid: the substrate has 64 x 64 points, the solid 32 x 32"),
+    ("sizes", "solid.size_x", r"not on one grid: the substrate is 1e-05 m wide, the solid 2e-05 m"),
+    ("not_periodic", "substrate.periodic", r"not periodic .* set periodic = true"),
+    ("not_square", "substrate.files", r"square map .* 64 x 32 points"),
+    ("two_files", "substrate.files", r"one map per surface; the substrate has 2 files"),
+    ("numeric_eta", "interface.eta", r"own coherence: set interface.eta = 'measured'"),
+    ("measured_needs_maps", "bem.surfaces", r"needs every rough surface to be of kind 'topography'"),
+    ("q_min", "grid.q_min", r"lowest wavenumber is 2 pi / L"),
+])
+def test_measured_maps_bad_input_is_a_user_error(run_scene, tmp_path, case, key, message):
+    """Maps the BEM cannot use are refused with one clear error naming the key (before
+    anything computes, except the psd-grid mismatch, which needs the psd stage)."""
+    pytest.importorskip("tamaas")
+    pytest.importorskip("SurfaceTopography")
+    h1, h2 = measured_pair()
+    raw = topo_scene(tmp_path, h1, h2)
+    if case == "grids":
+        np.save(tmp_path / "h2.npy", h2[::2, ::2])
+    elif case == "sizes":
+        raw["solid"]["size_x"] = "20 um"
+    elif case == "not_periodic":
+        raw["substrate"]["periodic"] = False
+    elif case in ("not_square", "two_files"):
+        np.save(tmp_path / "h3.npy", h1[:, :32])
+        raw["substrate"]["files"] = ([str(tmp_path / "h3.npy")] if case == "not_square"
+                                     else [str(tmp_path / "h1.npy"), str(tmp_path / "h1.npy")])
+        if case == "not_square":
+            raw["substrate"]["size_y"] = "5 um"
+    elif case == "numeric_eta":
+        raw["interface"]["eta"] = 0.6
+    elif case == "measured_needs_maps":
+        raw["solid"] = {"kind": "self_affine", "H": 0.8, "qL": "6.3e5 1/m", "q1": "2e7 1/m", "hrms": "10 nm"}
+        raw["interface"]["eta"] = 0.0
+        raw["bem"]["surfaces"] = "measured"
+    elif case == "q_min":
+        raw["grid"] = {"q_min": "1e6 1/m"}
+    with pytest.raises(UserError, match=message) as info:
+        run_scene(raw)
+    assert info.value.key == key
+    if case not in ("q_min",):
+        assert not (tmp_path / "out" / "bem.nc").exists()
+
+
+def test_synthesized_surfaces_with_measured_spectra_on_request(run_scene, tmp_path):
+    """bem.surfaces = 'synthesized': random periodic pairs with the maps' measured spectra and
+    the scene's eta (here two values), on the bem.grid lattice; eta = 1 and equal spectra would
+    fit, so the coherent pair has more contact than the incoherent one."""
+    pytest.importorskip("tamaas")
+    pytest.importorskip("SurfaceTopography")
+    h1, h2 = measured_pair()
+    raw = topo_scene(tmp_path, h1, h2, interface={"eta": [0.0, 0.9]},
+                     bem={"surfaces": "synthesized", "grid": 64, "realizations": 1, "seed": 2})
+    ds = run_scene(raw)["base"]["bem"]
+    assert ds.attrs["bem_surfaces"] == "synthesized" and list(ds["eta"].values) == [0.0, 0.9]
+    assert float(ds["bem_zeta"]) == pytest.approx(16.0)
+    a = ds["bem_contact_area_ratio_mean"]
+    assert np.all(a.sel(eta=0.9) > a.sel(eta=0.0))
