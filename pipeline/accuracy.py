@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from . import engine, scene as scenes, store
+from . import __version__, engine, scene as scenes, store
 from .scene import PRESETS, Scene
 from .stage import Stage, sections, stages
 
@@ -135,7 +135,8 @@ def measure(scene: Scene, outdir: Path, report=print) -> xr.Dataset:
         Conventions="CF-1.11",
         title="roughcontact accuracy: error and cost of each stage's resolution",
         scene=scene.label,
-        software_version=store.__version__ if hasattr(store, "__version__") else "",
+        software_version=__version__,
+        git_commit=store.git_commit(),
         date_created=store.utc_now(),
         history=f"{store.utc_now()}: roughcontact accuracy on {scene.label}",
     )
