@@ -20,7 +20,7 @@ import xarray as xr
 
 from . import __version__, engine, scene as scenes, store
 from .scene import PRESETS, Scene
-from .stage import Stage, sections, stages
+from .stage import Stage, sections
 
 
 def resolution_params(stage_list: list[Stage]) -> dict[str, object]:

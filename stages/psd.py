@@ -258,7 +258,6 @@ def _rough(spec) -> bool:
 
 def _measured(name: str, spec: dict, loaded, q_grid: np.ndarray) -> tuple[np.ndarray, dict]:
     """A psd_file surface interpolated onto the q grid, plus attributes saying how."""
-    key = f"{name}.path"
     path = str(spec["path"])
     attrs: dict = {}
     convention = spec["convention"]
@@ -373,7 +372,6 @@ def compute_psd(inp: StageInput) -> xr.Dataset:
     surfaces: dict[str, xr.DataArray] = {}
     for name, index in _SURFACES.items():
         spec = inp[name]
-        var = f"psd_{name}"
         if not _rough(spec):
             da = xr.zeros_like(q)
             attrs = {"surface": "smooth"}
