@@ -68,13 +68,10 @@ def scheduler(setting: str) -> Iterator[object]:
 
 def _worker_version() -> str:
     """Run on each worker: the roughcontact version it can import (stages included)."""
-    import importlib
-
-    from pipeline import __version__
-    from pipeline.stage import stages
+    from roughcontact import __version__
+    from roughcontact.stage import stages
 
     stages()
-    importlib.import_module("stages")
     return __version__
 
 

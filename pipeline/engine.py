@@ -20,7 +20,7 @@ from .errors import UserError
 from .readers import READERS
 from .schema import MISSING
 from .scene import Scene
-from .stage import Stage, StageInput, producer_of, stages
+from .stage import Stage, StageInput, coords, producer_of, stages
 
 
 @dataclass
@@ -186,21 +186,25 @@ def _short(value) -> str:
 
 
 def _finish(ds: xr.Dataset, p: StagePlan) -> xr.Dataset:
-    """Fill in declared units/long names, check every variable and coordinate has them, add
-    provenance."""
+    """Stamp the declared units and long names on every variable and coordinate, refuse what a
+    stage labelled itself or did not declare, and add provenance."""
     st = p.stage
-    declared = {**st.coords, **st.outputs}
-    for name in ds.variables:
-        attrs = ds[name].attrs
-        if name in declared:
-            attrs.setdefault("units", declared[name].units)
-            attrs.setdefault("long_name", declared[name].long_name)
-        missing = [a for a in ("units", "long_name") if a not in attrs]
-        if missing:
-            raise RuntimeError(f"stage {st.name} returned {name!r} without {', '.join(missing)} (a bug in the stage)")
+    declared = {**coords(), **st.coords, **st.outputs}
     undeclared = [v for v in ds.data_vars if v not in st.outputs]
     if undeclared:
         raise RuntimeError(f"stage {st.name} returned undeclared variable(s) {undeclared} (a bug in the stage)")
+    for name in ds.variables:
+        if name not in declared:
+            raise RuntimeError(f"stage {st.name} returned coordinate {name!r} that nothing declares (a bug in the stage)")
+        stamp = declared[name].stamp()
+        attrs = ds[name].attrs
+        own = [a for a in ("units", "long_name", "standard_name") if a in attrs and attrs[a] != stamp.get(a)]
+        if own and name in ds.data_vars:
+            raise RuntimeError(f"stage {st.name} labels {name!r} itself ({', '.join(own)}); units and long names "
+                               "are declared once, in its Var (a bug in the stage)")
+        for a in ("units", "long_name", "standard_name"):
+            attrs.pop(a, None)
+        attrs.update(stamp)
     extra = dict(ds.attrs)
     ds.attrs = {**extra, **store.provenance_attrs(
         stage=st.name, version=st.version, key=p.key, parameters=p.params, upstream=p.record["upstream"],
@@ -251,9 +255,9 @@ def _run(scene, outdir, targets, force, report, compute_with):
     for i, p in enumerate(plans):
         if p.status == "fresh":
             continue
-        files[i] = {param: _read(p.stage, param, path) for param, path in p.file_paths.items()}
+        files[i] = {param: _read(p.stage, param, path, p.params) for param, path in p.file_paths.items()}
         if p.stage.validate is not None:
-            p.stage.validate(StageInput(params=p.params, files=files[i], wanted=p.wanted))
+            p.stage.validate(StageInput(params=p.params, files=files[i], wanted=p.wanted, stage=p.stage.name))
     n = len(plans)
     for i, p in enumerate(plans, start=1):
         tag = f"[{i}/{n}] {p.label}"
@@ -270,8 +274,11 @@ def _run(scene, outdir, targets, force, report, compute_with):
             files=files[i - 1],
             wanted=p.wanted,
             chunks=stage_chunks(scenes[p.variant], p.stage, p.params, p.wanted, upstream),
+            stage=p.stage.name,
         )
-        ds = _finish(p.stage.compute(inp), p)
+        with xr.set_options(keep_attrs=False):  # a variable's units come from its declaration, never by inheritance
+            computed = p.stage.compute(inp)
+        ds = _finish(computed, p)
         store.write(ds, p.path, compute_with=compute_with, progress_stream=report.stream)
         results[p.variant][p.stage.name] = _open(p.path)
         report(f"{tag}: done in {time.perf_counter() - t0:.2f} s -> {p.path}")
@@ -285,7 +292,12 @@ def stage_chunks(scene: Scene, st: Stage, params, wanted=frozenset(), upstream=N
 
     per_point = st.point_bytes(params, wanted, upstream or {}) if st.point_bytes else 512
     budget = scene.chunk_mb * 2**20 / max(per_point, 8)
-    return auto_chunks(scene.sweep_sizes(), budget, scene.chunks)
+    sizes = scene.sweep_sizes()
+    whole = [dim for dim in st.unchunked if dim in sizes]  # one chunk along these, whatever the scene says
+    for dim in whole:
+        budget /= sizes[dim]
+    return auto_chunks({d: n for d, n in sizes.items() if d not in whole}, budget,
+                       {d: n for d, n in scene.chunks.items() if d not in whole})
 
 
 def _open(path: Path) -> xr.Dataset:
@@ -295,11 +307,9 @@ def _open(path: Path) -> xr.Dataset:
     return xr.open_dataset(path, chunks={})
 
 
-def _reader(st: Stage, param: str) -> str:
-    return next(f.reader for f in st.files if f.param == param)
-
-
-def _read(st: Stage, param: str, path):
+def _read(st: Stage, param: str, path, params):
     """One loaded file, or a list of them for a ``paths`` parameter."""
-    reader = READERS[_reader(st, param)]
-    return [reader(p) for p in path] if isinstance(path, tuple) else reader(path)
+    spec = next(f for f in st.files if f.param == param)
+    reader = READERS[spec.reader]
+    options = dict(spec.options(params)) if spec.options is not None else {}
+    return [reader(p, **options) for p in path] if isinstance(path, tuple) else reader(path, **options)

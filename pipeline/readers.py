@@ -5,6 +5,9 @@
   ``# q [1/m]   C [m^4]`` or ``q (1/m), C (m^4)``. Every data row keeps its line number
   so that a stage can name the offending line.
 * :func:`read_netcdf` loads a NetCDF file into memory (with its attributes).
+* :func:`read_spectrum` reads a measured PSD (a text table or a NetCDF file) and returns
+  q and C in SI units, checked row by row (units from the scene or the header, finite
+  values, C >= 0, q > 0 and strictly increasing), errors naming the file and line.
 * :func:`read_topography` reads a measured surface (height map or line scan) in any of the
   instrument formats of the SurfaceTopography package (x3p, sdf, sur, opd, plu, datx,
   Gwyddion, Bruker/DI, text matrices, npy, NetCDF, ...).
@@ -12,6 +15,7 @@
 
 from __future__ import annotations
 
+import json
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -286,4 +290,90 @@ def read_topography(path: Path) -> Topography:
     )
 
 
-READERS = {"table": read_table, "netcdf": read_netcdf, "auto": read_auto, "topography": read_topography}
+@dataclass
+class Spectrum:
+    """A measured PSD read from a file, in SI units.
+
+    Attributes
+    ----------
+    path
+        The file.
+    q
+        Wavenumbers (1/m), positive and strictly increasing.
+    values
+        The PSD in the SI unit of its convention (``convention_units[convention]``), >= 0.
+    convention
+        The file's PSD convention (a NetCDF variable's ``psd_convention`` attribute wins over
+        the scene's).
+    attrs
+        What to record about the source (e.g. a NetCDF file's own provenance).
+    """
+
+    path: Path
+    q: np.ndarray
+    values: np.ndarray
+    convention: str
+    attrs: dict = field(default_factory=dict)
+
+
+def first_bad(bad: np.ndarray, message, path: Path, where) -> None:
+    """Raise a UserError naming the file and the row (``where(i)``) of the first True in ``bad``;
+    ``message(i)`` says what is wrong there."""
+    index = np.flatnonzero(bad)
+    if index.size:
+        raise UserError(message(index[0]), file=str(path), key=where(index[0]))
+
+
+def read_spectrum(path: Path, *, key: str, convention: str, convention_units: dict, columns=(0, 1),
+                  q_unit: str | None = None, value_unit: str | None = None, variable: str | None = None) -> Spectrum:
+    """Read a measured PSD: a text table (columns ``columns`` = [q, C]) or a NetCDF file with a
+    ``q`` coordinate. Units come from the scene (``q_unit``, ``value_unit``) or else from the
+    file (header ``# q [1/m]  C [m^4]`` or the NetCDF ``units`` attributes). ``key`` is the
+    scene section the file belongs to (errors name ``key.q_unit``, ``key.variable``, ...)."""
+    from .units import array_to_si
+
+    path = Path(path)
+    loaded = read_auto(path)
+    attrs: dict = {}
+    if isinstance(loaded, xr.Dataset):
+        if "q" not in loaded.coords and "q" not in loaded.variables:
+            raise UserError("NetCDF file has no 'q' coordinate", file=str(path))
+        if variable is None:
+            candidates = [v for v in loaded.data_vars if loaded[v].dims == ("q",)]
+            if len(candidates) != 1:
+                raise UserError(f"cannot tell which variable is the PSD ({', '.join(candidates) or 'none over q'}); "
+                                f"set {key}.variable", file=str(path))
+            variable = candidates[0]
+        if variable not in loaded:
+            raise UserError(f"no variable {variable!r} in the file", file=str(path), key=f"{key}.variable")
+        q_unit = q_unit or loaded["q"].attrs.get("units")
+        value_unit = value_unit or loaded[variable].attrs.get("units")
+        convention = loaded[variable].attrs.get("psd_convention", convention)
+        q_raw, c_raw = loaded["q"].values, loaded[variable].values
+        where = lambda i: f"index {i}"  # noqa: E731
+        attrs["source_provenance"] = json.dumps({k: str(v) for k, v in loaded.attrs.items()})
+    else:
+        iq, ic = (tuple(columns) + (None, None))[:2]
+        if iq is None or ic is None:
+            raise UserError("needs two column indices [q, C]", key=f"{key}.columns")
+        q_raw, c_raw = loaded.column(iq), loaded.column(ic)
+        q_unit = q_unit or (loaded.units[iq] if loaded.units else None)
+        value_unit = value_unit or (loaded.units[ic] if loaded.units else None)
+        where = lambda i: f"line {loaded.lines[i]}"  # noqa: E731
+    if not q_unit or not value_unit:
+        raise UserError(
+            f"units of the {'q' if not q_unit else 'C'} column unknown: put them in the file's header "
+            f"('# q [1/m]  C [m^4]') or set {key}.{'q_unit' if not q_unit else 'C_unit'}", file=str(path))
+    q = array_to_si(q_raw, q_unit, "1/m", key=f"{key}.q_unit")
+    values = array_to_si(c_raw, value_unit, convention_units[convention], key=f"{key}.C_unit")
+    first_bad(~np.isfinite(q) | ~np.isfinite(values), lambda i: "NaN or infinite value", path, where)
+    first_bad(values < 0, lambda i: f"negative PSD value {c_raw[i]:g}", path, where)
+    first_bad(q <= 0, lambda i: f"wavenumber must be positive, got {q_raw[i]:g}", path, where)
+    first_bad(np.diff(q) <= 0, lambda i: "q is not strictly increasing", path, lambda i: where(i + 1))
+    if q.size < 2:
+        raise UserError("needs at least two data rows", file=str(path))
+    return Spectrum(path=path, q=q, values=values, convention=convention, attrs=attrs)
+
+
+READERS = {"table": read_table, "netcdf": read_netcdf, "auto": read_auto, "topography": read_topography,
+           "spectrum": read_spectrum}

@@ -94,11 +94,11 @@ class Scene:
 
 
 def default_scene_path() -> Path:
-    return Path(str(resources.files("pipeline") / "scenes" / "default.toml"))
+    return Path(str(resources.files(__package__) / "scenes" / "default.toml"))
 
 
 def builtin_scenes() -> dict[str, Path]:
-    folder = resources.files("pipeline") / "scenes"
+    folder = resources.files(__package__) / "scenes"
     return {Path(str(p)).stem: Path(str(p)) for p in folder.iterdir() if str(p).endswith(".toml")}
 
 

@@ -5,7 +5,18 @@ its name and version, the upstream stages it needs, the scene keys it reads, the
 needs read, and its output variables with units and long names. The engine does planning,
 hashing, caching, I/O, chunking and scheduling; a stage does none of these.
 
-Register a stage with :func:`register` at import time of its module in :mod:`stages`.
+This module is the whole API a stage module uses (with :mod:`roughcontact.physics` for the
+numbers): :class:`Stage`, :class:`Var`, :class:`FileInput`, :class:`Figure`,
+:class:`StageInput`, :class:`Param`, :class:`Section`, :func:`register`,
+:func:`register_section`, :func:`register_params`, :func:`register_coords` and the errors.
+
+Metadata has one source. A variable's units and long name are written once, in its
+:class:`Var` (a stage's ``outputs`` or ``coords``, or a coordinate shared by several stages
+through :func:`register_coords`); the engine stamps them on the result and rejects a result
+whose stage set ``units`` or ``long_name`` itself.
+
+Register a stage with :func:`register` at import time of its module in
+:mod:`roughcontact.stages`.
 """
 
 from __future__ import annotations
@@ -16,34 +27,52 @@ from typing import Any, Callable, Mapping
 import numpy as np
 import xarray as xr
 
-from .errors import UserError
-from .schema import Param, Section
+from .errors import ComputationError, UserError
+from .schema import MISSING, REQUIRED, Param, Section
+
+__all__ = [
+    "ComputationError", "FileInput", "Figure", "MISSING", "Param", "REQUIRED", "Section", "Stage", "StageInput",
+    "UserError", "Var", "coords", "register", "register_coords", "register_params", "register_section",
+]
 
 
 @dataclass(frozen=True)
 class Var:
-    """An output variable (or coordinate) of a stage: its units and long name.
+    """An output variable (or coordinate) of a stage: its units and long name, written here only.
 
-    ``optional`` variables are produced only when the scene asks for them by name.
+    ``optional`` variables are produced only when the scene asks for them by name;
+    ``standard_name`` is the CF standard name where CF has one; ``attrs`` are further fixed
+    attributes (e.g. a ``comment``) stamped with the units.
     """
 
     units: str
     long_name: str
     optional: bool = False
+    standard_name: str | None = None
+    attrs: Mapping[str, str] = field(default_factory=dict)
+
+    def stamp(self) -> dict[str, str]:
+        """The attributes the engine writes on the variable."""
+        out = {"units": self.units, "long_name": self.long_name, **self.attrs}
+        if self.standard_name:
+            out["standard_name"] = self.standard_name
+        return out
 
 
 @dataclass(frozen=True)
 class FileInput:
     """A file the engine must read for the stage.
 
-    ``param`` is the dotted scene key holding the path (e.g. ``substrate.path``);
-    ``reader`` is ``"table"`` (text/CSV columns, :func:`pipeline.readers.read_table`) or
-    ``"auto"`` (NetCDF by suffix, else table). ``options`` maps reader options to scene keys.
+    ``param`` is the dotted scene key holding the path (e.g. ``substrate.path``); ``reader``
+    names a reader of :data:`roughcontact.readers.READERS` (``"table"``, ``"netcdf"``,
+    ``"auto"``, ``"topography"``, ...). ``options(params) -> dict`` gives the reader's keyword
+    arguments from the stage's parameters (e.g. the column units the scene sets), so that the
+    reader hands the stage arrays in SI units.
     """
 
     param: str
     reader: str = "auto"
-    options: Mapping[str, str] = field(default_factory=dict)
+    options: Callable[[Mapping[str, Any]], Mapping[str, Any]] | None = None
 
 
 @dataclass(frozen=True)
@@ -97,6 +126,9 @@ class Stage:
     main_outputs: tuple[str, ...] = ()
     #: the relative error the default preset must reach on ``main_outputs``
     tolerance: float = 1e-4
+    #: sweep dimensions the stage's computation couples (e.g. a derivative along ``p``): the
+    #: engine never chunks them, whatever the scene's ``[numerics] chunks`` says
+    unchunked: tuple[str, ...] = ()
 
 
 @dataclass
@@ -122,18 +154,23 @@ class StageInput:
     files: Mapping[str, Any] = field(default_factory=dict)
     wanted: frozenset[str] = frozenset()
     chunks: Mapping[str, int] = field(default_factory=dict)
+    stage: str = "?"
 
     def __getitem__(self, key: str):
-        return self.params[key]
+        try:
+            return self.params[key]
+        except KeyError:
+            raise KeyError(f"stage {self.stage} reads scene key {key!r} that it does not declare in its params "
+                           f"(a bug in the stage)") from None
 
-    def sweep(self, dim: str, values, units: str, long_name: str) -> xr.DataArray:
+    def sweep(self, dim: str, values) -> xr.DataArray:
         """A sweep coordinate as a DataArray: a 1-D array becomes dimension ``dim`` (dask-chunked
-        when the scene sets a chunk size for it); a scalar stays a scalar coordinate."""
+        when the scene sets a chunk size for it); a scalar stays a scalar coordinate. Units and
+        long name come from the coordinate's declaration."""
         values = np.asarray(values, dtype=float)
-        attrs = {"units": units, "long_name": long_name}
         if values.ndim == 0:
-            return xr.DataArray(values, name=dim, attrs=attrs)
-        da = xr.DataArray(values, dims=(dim,), coords={dim: (dim, values, attrs)}, name=dim, attrs=attrs)
+            return xr.DataArray(values, name=dim)
+        da = xr.DataArray(values, dims=(dim,), coords={dim: (dim, values)}, name=dim)
         size = int(self.chunks.get(dim, 0) or 0)
         if 0 < size < values.size:
             da = da.chunk({dim: size})
@@ -142,6 +179,23 @@ class StageInput:
 
 _STAGES: dict[str, Stage] = {}
 _SECTIONS: dict[str, Section] = {}
+_COORDS: dict[str, Var] = {}
+
+
+def register_coords(**declared: Var) -> None:
+    """Declare coordinates shared by several stages (``p``, ``eta``, ``zeta``, ``q``, ...) once.
+
+    A stage's own ``coords`` may not redeclare them."""
+    for name, var in declared.items():
+        if name in _COORDS and _COORDS[name] != var:
+            raise ValueError(f"coordinate {name!r} declared twice")
+        _COORDS[name] = var
+
+
+def coords() -> dict[str, Var]:
+    """The shared coordinates declared by :func:`register_coords`."""
+    _load_plugins()
+    return dict(_COORDS)
 
 
 def register(stage: Stage) -> Stage:
@@ -214,13 +268,47 @@ def _upstream_closure(st: Stage, all_stages: dict[str, Stage]) -> set[str]:
     return seen
 
 
+_LOADED = False
+
+
 def _load_plugins() -> None:
-    """Import every module of the :mod:`stages` package so that it registers itself."""
+    """Import every module of :mod:`roughcontact.stages` so that it registers itself, then
+    check the declarations against each other (once)."""
+    global _LOADED
+    if _LOADED:
+        return
     import importlib
     import pkgutil
 
-    import stages as pkg
-
+    pkg = importlib.import_module(f"{__package__}.stages")
     for mod in pkgutil.iter_modules(pkg.__path__):
-        if not mod.name.startswith("_"):
-            importlib.import_module(f"stages.{mod.name}")
+        if not mod.name.startswith("_") and not mod.ispkg:
+            importlib.import_module(f"{pkg.__name__}.{mod.name}")
+    _LOADED = True
+    check_declarations(_STAGES, _SECTIONS, _COORDS)
+
+
+def check_declarations(all_stages: Mapping[str, Stage], all_sections: Mapping[str, Section],
+                       shared_coords: Mapping[str, Var]) -> None:
+    """Every scene key a stage declares exists in the schema, every upstream stage exists, and no
+    stage redeclares a shared coordinate. Raises ValueError (a bug in a stage) otherwise."""
+    for st in all_stages.values():
+        for dotted in st.params:
+            section, _, key = dotted.partition(".")
+            if section not in all_sections:
+                raise ValueError(f"stage {st.name} reads {dotted!r}: there is no scene section [{section}]")
+            sec = all_sections[section]
+            names = {p.name for p in sec.params} | {p.name for ps in sec.variants.values() for p in ps}
+            if sec.discriminator:
+                names.add(sec.discriminator)
+            if key and key not in names:
+                raise ValueError(f"stage {st.name} reads {dotted!r}: [{section}] has no key {key!r}")
+        for f in st.files:
+            if f.param not in st.params and f.param.partition(".")[0] not in st.params:
+                raise ValueError(f"stage {st.name} reads the file of {f.param!r} without declaring that key in params")
+        for up in st.requires:
+            if up not in all_stages:
+                raise ValueError(f"stage {st.name} requires {up!r}, which is not a stage")
+        shared = sorted(set(st.coords) & set(shared_coords))
+        if shared:
+            raise ValueError(f"stage {st.name} redeclares the shared coordinate(s) {shared}")

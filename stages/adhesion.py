@@ -32,12 +32,12 @@ import numpy as np
 import xarray as xr
 from scipy.special import erfcx
 
-from pipeline.errors import ComputationError, UserError
-from pipeline.schema import Param, Section
-from pipeline.stage import Figure, Stage, StageInput, Var, register, register_params, register_section
+from roughcontact.stage import ComputationError, UserError
+from roughcontact.stage import Param, Section
+from roughcontact.stage import Figure, Stage, StageInput, Var, register, register_params, register_section
 
-from .psd import hrms_from_psd, psd_combined, rms_slope_from_psd
-from .quadrature import integral, integral_to
+from roughcontact.physics.spectra import hrms_from_psd, psd_combined, rms_slope_from_psd
+from roughcontact.physics.quadrature import integral, integral_to
 
 #: Elastic-energy factor models S_el(P) in U_el (eq 10): name -> description.
 MODELS = {
@@ -858,13 +858,7 @@ register(
             "adhesion_length": Var("m", "adhesion length delta (eq 14)"),
             "hrms_substrate_vanishing": Var("m", "substrate hrms at which adhesion vanishes"),
         },
-        coords={
-            "zeta": Var("1", "magnification (Volterra grid)"),
-            "model": Var("1", "elastic-energy factor model"),
-            "eta": Var("1", "coherence of the two surfaces' roughness"),
-            "hrms_substrate": Var("m", "rms roughness of the substrate"),
-            "hrms_solid": Var("m", "rms roughness of the solid"),
-        },
+        coords={"model": Var("1", "elastic-energy factor model")},
         figures=(
             Figure("fig1_adhesion_one_surface", "gamma_eff and A/A0 at zero load, one rough surface (seed Fig. 1)",
                    ("adhesion",), figure_one_surface),

@@ -42,12 +42,12 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from pipeline.errors import UserError
-from pipeline.schema import Param, Section
-from pipeline.stage import FileInput, Figure, Stage, StageInput, Var, register, register_params, register_section
+from roughcontact.stage import UserError
+from roughcontact.stage import Param, Section
+from roughcontact.stage import FileInput, Figure, Stage, StageInput, Var, register, register_params, register_section
 
-from .contact import effective_modulus
-from .quadrature import loglog_interp
+from roughcontact.physics.contact import effective_modulus
+from roughcontact.physics.quadrature import loglog_interp
 from .topography import _prepare, _process, is_topography
 
 #: the optional dependency and how to install it (named in the error without it)
@@ -837,8 +837,6 @@ register(
             "E_star": Var("Pa", "effective modulus E*"),
         },
         coords={
-            "p": Var("Pa", "nominal pressure"),
-            "eta": Var("1", "coherence of the two surfaces' roughness"),
             "realization": Var("1", "index of the surface pair"),
             "bem_stress_level": Var("1", "histogram bin centre, sigma / (p + sigma_width sqrt(G))"),
             "bem_sigma": Var("Pa", "local contact pressure at each histogram bin centre"),

@@ -26,12 +26,12 @@ import numpy as np
 import xarray as xr
 from scipy.special import erf
 
-from pipeline.errors import UserError
-from pipeline.schema import Param, Section
-from pipeline.stage import Figure, Stage, StageInput, Var, register, register_params, register_section
+from roughcontact.stage import UserError
+from roughcontact.stage import Param, Section
+from roughcontact.stage import Figure, Stage, StageInput, Var, register, register_params, register_section
 
 from .modulus import modulus_at
-from .quadrature import cumulative_integral, gauss_legendre, running_weighted_integral
+from roughcontact.physics.quadrature import cumulative_integral, gauss_legendre, running_weighted_integral
 
 # ----------------------------------------------------------------------------------------
 # Kernels (pure numpy)
@@ -393,8 +393,7 @@ STAGE = register(
             "sliding_G": Var("1", "G(q; v) of eq 62 (corrected)", optional=True),
             "friction_density": Var("1", "d mu / d ln q", optional=True),
         },
-        coords={"v": Var("m/s", "sliding velocity"), "p": Var("Pa", "nominal pressure sigma0"),
-                "q": Var("1/m", "wavenumber")},
+        coords={},
         figures=(
             Figure("fig6_psds", "C(q) of the two surfaces (seed Fig. 6)", ("psd", "friction"), figure_psds),
             Figure("fig8_friction_substrate_only", "mu(v): substrate only vs both rough (seed Fig. 8)",

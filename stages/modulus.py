@@ -25,12 +25,12 @@ import warnings
 import numpy as np
 import xarray as xr
 
-from pipeline.errors import UserError
-from pipeline.schema import Param, Section
-from pipeline.stage import FileInput, Figure, Stage, StageInput, Var, register, register_params, register_section
-from pipeline.units import array_to_si
+from roughcontact.stage import UserError
+from roughcontact.stage import Param, Section
+from roughcontact.stage import FileInput, Figure, Stage, StageInput, Var, register, register_params, register_section
+from roughcontact.units import array_to_si
 
-from .quadrature import loglog_interp
+from roughcontact.physics.quadrature import loglog_interp
 
 # ----------------------------------------------------------------------------------------
 # Kernels (pure numpy)
@@ -641,7 +641,7 @@ register(
             "shift_factor": Var("1", "horizontal shift factor a_T"),
             "vertical_shift_factor": Var("1", "vertical shift factor b_T"),
         },
-        coords={"omega": Var("rad/s", "angular frequency"), "T": Var("K", "temperature")},
+        coords={},
         figures=(Figure("fig7_modulus", "E'(f), E''(f) (seed Fig. 7)", ("modulus",), figure_modulus),),
         doc="Complex modulus E(omega, T) (model or measured master curve, WLF / table shift), stored as E' and E''.",
     )

@@ -25,13 +25,15 @@ import numpy as np
 import xarray as xr
 from scipy.special import erf, erfcx, exp1
 
-from pipeline.errors import UserError
-from pipeline.schema import Param, Section
-from pipeline.stage import Figure, Stage, StageInput, Var, register, register_params, register_section
+from roughcontact.stage import UserError
+from roughcontact.stage import Param, Section
+from roughcontact.stage import Figure, Stage, StageInput, Var, register, register_params, register_section
 
-from .contact import _zeta_values, effective_modulus
-from ._plotting import curve_cases
-from .quadrature import (
+from roughcontact.physics.contact import effective_modulus
+
+from .shared import zeta_values as _zeta_values
+from .figures.common import curve_cases
+from roughcontact.physics.quadrature import (
     cumulative_integral,
     gauss_legendre_panels,
     integral_to,
@@ -452,7 +454,7 @@ register(
             "separation_beta": Var("1", "prefactor beta of p = beta E* exp(-u/u0) (eq 60)"),
             "E_star": Var("Pa", "effective modulus E*"),
         },
-        coords={"zeta": Var("1", "magnification"), "p": Var("Pa", "nominal pressure")},
+        coords={},
         figures=(Figure("fig5_separation", "log10(p/E*) against u (seed Fig. 5)", ("separation",), figure_separation),),
         doc="Mean interfacial separation u(p, zeta, eta) (eq 57) and its small-pressure law u0, beta (eqs 59-60).",
         main_outputs=("mean_separation",),

@@ -25,18 +25,20 @@ import scipy.fft
 import scipy.special
 import xarray as xr
 
-from pipeline.errors import UserError
-from pipeline.schema import Param
-from pipeline.stage import FileInput, Figure, Stage, StageInput, Var, register, register_params
-from pipeline.units import array_to_si
+from roughcontact.stage import UserError
+from roughcontact.stage import Param
+from roughcontact.stage import FileInput, Figure, Stage, StageInput, Var, register, register_params
+from roughcontact.units import array_to_si
 
-from .quadrature import loglog_interp
+from roughcontact.physics.quadrature import loglog_interp
+from roughcontact.physics.spectra import isotropic_factor
+
+from .shared import DETREND_DEGREE, SURFACES, is_topography, needs_topography  # noqa: F401
 
 # ----------------------------------------------------------------------------------------
 # Kernels (pure numpy)
 # ----------------------------------------------------------------------------------------
 
-DETREND_DEGREE = {"mean": 0, "plane": 1, "curvature": 2}
 
 
 def _orthogonal_polynomials(n: int, degree: int) -> np.ndarray:
@@ -111,17 +113,6 @@ def log_bin_edges(q_lo: float, q_hi: float, bins_per_decade: int) -> np.ndarray:
     k0 = math.floor(bins_per_decade * math.log10(q_lo)) - 1
     k1 = math.ceil(bins_per_decade * math.log10(q_hi)) + 1
     return 10.0 ** (np.arange(k0, k1 + 1) / bins_per_decade)
-
-
-def isotropic_factor(H):
-    """c(H) in C(q) = c(H) C1D(q) / q, the 2D isotropic PSD (Persson) from a profile PSD C1D.
-
-    c(H) = Gamma(1 + H) / (2 pi^(3/2) Gamma(H + 1/2)); c(1/2) = 1/(4 pi). Exact for an
-    isotropic surface whose PSD is a power law C ~ q^(-2(1+H)) (from C1D(q) = 2 pi
-    \\int dq_y C(sqrt(q^2 + q_y^2))); an approximation otherwise (roll-off, cut-offs).
-    """
-    H = np.asarray(H, dtype=float)
-    return np.exp(scipy.special.gammaln(1.0 + H) - scipy.special.gammaln(H + 0.5)) / (2.0 * np.pi**1.5)
 
 
 def psd_map(h, sx, sy):
@@ -303,48 +294,11 @@ def tip_radius_cutoff(h, sx, tip_radius, safety_factor=0.5):
 # Scene keys (the "topography" kind of the [substrate]/[solid] sections, in stages/psd.py)
 # ----------------------------------------------------------------------------------------
 
-TOPOGRAPHY_PARAMS = (
-    Param("files", "paths", doc="height map(s) or line scan(s) of this surface, any format SurfaceTopography reads; "
-          "several files (e.g. several magnifications) are merged onto one q grid"),
-    Param("height_unit", "str", default=None, doc="unit of heights (and sizes) for files that do not say (npy, bare text)"),
-    Param("size_x", "quantity", "m", default=None, lo=0.0, lo_open=True, doc="scan length along x, for files that do not say"),
-    Param("size_y", "quantity", "m", default=None, lo=0.0, lo_open=True,
-          doc="scan length along y, for files that do not say (default: square pixels)"),
-    Param("periodic", "bool", default=None, doc="treat the data as periodic (default: as the file says; measurements are not)"),
-    Param("analysis", "choice", default="area", choices=("area", "profiles"),
-          doc="maps: 2D radial PSD ('area') or average of the line scans along x ('profiles'); line scans: always profiles"),
-    Param("detrend", "choice", default=None, choices=tuple(DETREND_DEGREE),
-          doc="polynomial removed before the FFT (default: mean if periodic, else plane)"),
-    Param("window", "choice", default=None, choices=("hann", "none"),
-          doc="window against edge leakage (default: hann if not periodic, else none)"),
-    Param("hurst", "quantity", "", default=0.5, lo=0.0, hi=1.0, lo_open=True,
-          doc="Hurst exponent assumed in the line-scan -> isotropic PSD conversion (exact for a self-affine surface)"),
-    Param("tip_radius", "quantity", "m", default=None, lo=0.0, lo_open=True,
-          doc="probe tip radius: drop wavelengths shorter than the tip-artefact cutoff (Sanner 2022)"),
-    Param("resolution", "quantity", "m", default=None, lo=0.0, lo_open=True,
-          doc="lateral resolution of the instrument: drop wavelengths shorter than it"),
-    Param("q_reliable", "quantity", "1/m", default=None, lo=0.0, lo_open=True, doc="drop wavenumbers above this"),
-    Param("extend", "choice", default="none", choices=("none", "power_law", "zero"),
-          doc="how the psd stage extends the measured PSD beyond its q range (none: error)"),
-)
-
 register_params(
     "numerics",
     Param("topography_bins_per_decade", "int", default=20, lo=2, hi=200,
           doc="logarithmic wavenumber bins per decade for the radial average of measured PSDs"),
 )
-
-SURFACES = ("substrate", "solid")
-
-
-def is_topography(spec) -> bool:
-    return spec is not None and spec.get("kind") == "topography"
-
-
-def needs_topography(values) -> bool:
-    """Whether a scene (its section values) has a surface of kind 'topography'."""
-    return any(is_topography(values.get(name)) for name in SURFACES)
-
 
 # ----------------------------------------------------------------------------------------
 # Stage wrapper

@@ -20,11 +20,11 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from stages.adhesion import (  # noqa: E402
+from roughcontact.stages.adhesion import (  # noqa: E402
     _Problem, effective_modulus, layer_resolving_offset, solve_partial_contact, vanishing_scale, zeta_grid,
 )
-from stages.psd import psd_combined, self_affine_hrms_factor, self_affine_psd  # noqa: E402
-from stages.quadrature import log_grid  # noqa: E402
+from roughcontact.physics.spectra import psd_combined, self_affine_hrms_factor, self_affine_psd  # noqa: E402
+from roughcontact.physics.quadrature import log_grid  # noqa: E402
 
 E_STAR = effective_modulus(77.2e9, 0.42)
 DG = 1.602176634

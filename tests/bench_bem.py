@@ -21,8 +21,8 @@ CHILD = r"""
 import json, resource, sys, time
 import numpy as np
 sys.path.insert(0, {root!r})
-from stages.bem import grid_band, solve_contact, synthesize_pair
-from stages.psd import self_affine_hrms_factor, self_affine_psd
+from roughcontact.stages.bem import grid_band, solve_contact, synthesize_pair
+from roughcontact.physics.spectra import self_affine_hrms_factor, self_affine_psd
 import tamaas
 n = {n}
 base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss

@@ -24,11 +24,11 @@ import numpy as np
 
 sys.path.insert(0, str(__import__("pathlib").Path(__file__).resolve().parent.parent))
 
-from pipeline import scene as scenes
-from pipeline.stage import StageInput
-from stages import friction as fr
-from stages import modulus as md
-from stages import psd as ps
+from roughcontact import scene as scenes
+from roughcontact.stage import StageInput
+from roughcontact.stages import friction as fr
+from roughcontact.stages import modulus as md
+from roughcontact.stages import psd as ps
 
 REF = (400, 256)
 PAIRS = [(ppd, n) for ppd in (10, 20, 30, 40, 50, 100) for n in (8, 12, 16, 24, 32, 48)]

@@ -12,7 +12,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from pipeline import engine, scene as scenes
+from roughcontact import engine, scene as scenes
 
 
 def main() -> None:

@@ -21,11 +21,11 @@ from scipy.special import exp1
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from pipeline.scene import from_dict  # noqa: E402
-from pipeline.stage import StageInput, stages  # noqa: E402
-from stages.psd import self_affine_hrms_factor, self_affine_psd  # noqa: E402
-from stages.quadrature import cumulative_integral, log_grid  # noqa: E402
-from stages.separation import mean_separation, separation_nodes  # noqa: E402
+from roughcontact.scene import from_dict  # noqa: E402
+from roughcontact.stage import StageInput, stages  # noqa: E402
+from roughcontact.physics.spectra import self_affine_hrms_factor, self_affine_psd  # noqa: E402
+from roughcontact.physics.quadrature import cumulative_integral, log_grid  # noqa: E402
+from roughcontact.stages.separation import mean_separation, separation_nodes  # noqa: E402
 
 H, QL, Q1 = 0.8, 2e8, 4e10
 E_STAR = 77.2e9 / (1 - 0.42**2)
@@ -62,7 +62,7 @@ def rel_error(u, ref, mask):
 
 def _preset_settings():
     """(q points/decade, panels/decade, Gauss points) of each preset, read from the declarations."""
-    from pipeline.stage import sections
+    from roughcontact.stage import sections
 
     params = {p.name: p for p in sections()["numerics"].params}
     names = ("points_per_decade", "separation_panels_per_decade", "separation_gauss_points")

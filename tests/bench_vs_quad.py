@@ -27,8 +27,8 @@ from scipy.special import erf
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from pipeline import engine, scene as scenes  # noqa: E402
-from stages.psd import self_affine_hrms_factor  # noqa: E402
+from roughcontact import engine, scene as scenes  # noqa: E402
+from roughcontact.physics.spectra import self_affine_hrms_factor  # noqa: E402
 from test_friction import _brute_force_mu  # noqa: E402
 from test_separation import brute_force_u  # noqa: E402
 

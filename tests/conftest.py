@@ -6,7 +6,7 @@ import copy
 
 import pytest
 
-from pipeline import engine, scene as scenes
+from roughcontact import engine, scene as scenes
 
 SURFACE = {"kind": "self_affine", "H": 0.8, "qL": "2e8 1/m", "q1": "4e10 1/m", "hrms": "1 nm"}
 

@@ -8,14 +8,14 @@ from hypothesis import assume, given, settings, strategies as st
 from scipy.integrate import quad
 from scipy.special import erf
 
-from pipeline import engine, scene as scenes
-from pipeline.errors import ComputationError, UserError
-from stages.adhesion import (
+from roughcontact import engine, scene as scenes
+from roughcontact.errors import ComputationError, UserError
+from roughcontact.stages.adhesion import (
     _Problem, adhesion_length, detachment_volterra, layer_resolving_offset, effective_modulus, gamma_eff_full_contact, solve_partial_contact,
     surface_area_factor, vanishing_scale, zeta_grid,
 )
-from stages.psd import psd_combined, self_affine_hrms_factor, self_affine_psd
-from stages.quadrature import log_grid
+from roughcontact.physics.spectra import psd_combined, self_affine_hrms_factor, self_affine_psd
+from roughcontact.physics.quadrature import log_grid
 
 E_STAR = effective_modulus(77.2e9, 0.42)
 DG = 1.602176634  # 100 meV/angstrom^2 in J/m^2
@@ -309,7 +309,7 @@ def test_stage_models_and_pairs(tmp_path):
 
 
 def test_non_convergence_in_the_stage_names_the_sweep_point(tmp_path, monkeypatch):
-    import stages.adhesion as mod
+    import roughcontact.stages.adhesion as mod
 
     def failing(prob, sigma0, c0, c1, **kw):
         err = ComputationError("self-consistent gamma_eff: no convergence in 80 iterations; largest residual 0.25")
@@ -326,7 +326,7 @@ def test_figures_draw(tmp_path):
     import matplotlib
 
     matplotlib.use("Agg")
-    from stages.adhesion import figure_one_surface, figure_two_surfaces
+    from roughcontact.stages.adhesion import figure_one_surface, figure_two_surfaces
 
     raw = _raw(["5 angstrom", "12 angstrom", "20 angstrom"],
                solid={"kind": "self_affine", "H": 0.8, "qL": "7e6 1/m", "q1": "1.4e9 1/m", "hrms": "6 angstrom"},

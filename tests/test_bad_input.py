@@ -3,7 +3,7 @@ and nothing written."""
 
 import pytest
 
-from pipeline.cli import main
+from roughcontact.cli import main
 
 from conftest import SURFACE, make_scene
 

@@ -18,9 +18,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from pipeline import cli
-from pipeline.errors import UserError
-from stages.bem import (
+from roughcontact import cli
+from roughcontact.errors import UserError
+from roughcontact.stages.bem import (
     EXTRA,
     band_limit,
     contact_pair,
@@ -35,7 +35,7 @@ from stages.bem import (
     synthesize_pair,
     white_noise_pair,
 )
-from stages.psd import self_affine_psd
+from roughcontact.physics.spectra import self_affine_psd
 
 # a self-affine PSD in reduced units: qL = 1 (map side 2 pi), roll-off at 4, cut-off 100
 Q = np.geomspace(1.0, 100.0, 201)
@@ -510,7 +510,7 @@ def test_measured_path_through_the_engine_is_finite_and_in_one_band(run_scene, t
     solves on the substrate's map alone."""
     pytest.importorskip("tamaas")
     pytest.importorskip("SurfaceTopography")
-    from stages.quadrature import integral
+    from roughcontact.physics.quadrature import integral
 
     h1, h2 = measured_pair(q_cut=32.0)
     raw = topo_scene(tmp_path, h1, h2, variants={"substrate_only": {"solid": {"kind": "smooth"},

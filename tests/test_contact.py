@@ -7,7 +7,7 @@ from hypothesis import given, settings, strategies as st
 from scipy import integrate
 from scipy.special import erf
 
-from stages.contact import contact_area_ratio, effective_modulus, stress_distribution
+from roughcontact.physics.contact import contact_area_ratio, effective_modulus, stress_distribution
 
 from conftest import SURFACE, make_scene
 

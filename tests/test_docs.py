@@ -3,7 +3,7 @@ what CI runs."""
 
 from pathlib import Path
 
-from pipeline import scene
+from roughcontact import scene
 
 ROOT = Path(__file__).resolve().parent.parent
 

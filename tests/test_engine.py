@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from pipeline import engine, scene as scenes, store
-from pipeline.cli import main
+from roughcontact import engine, scene as scenes, store
+from roughcontact.cli import main
 
 from conftest import make_scene
 
@@ -175,6 +175,6 @@ def test_a_bad_input_file_of_a_later_stage_writes_nothing_at_all(tmp_path, capsy
 
 
 def test_a_variable_several_stages_output_comes_from_the_cheapest():
-    from pipeline.stage import producer_of
+    from roughcontact.stage import producer_of
 
     assert producer_of("E_star").name == "contact"  # not separation or bem, which need more upstream

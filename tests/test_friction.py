@@ -17,12 +17,12 @@ from hypothesis import strategies as st
 from scipy.integrate import quad, solve_ivp
 from scipy.special import erf
 
-from pipeline import engine, scene as scenes
-from pipeline.errors import UserError
-from stages import friction as fr
-from stages import modulus as md
-from stages.contact import persson_G
-from stages.quadrature import log_grid
+from roughcontact import engine, scene as scenes
+from roughcontact.errors import UserError
+from roughcontact.stages import friction as fr
+from roughcontact.stages import modulus as md
+from roughcontact.physics.contact import persson_G
+from roughcontact.physics.quadrature import log_grid
 
 QUIET = engine.Reporter(None)
 
@@ -194,8 +194,8 @@ def test_agrees_with_brute_force_scipy(v):
 
 def _stage_at(sc, v):
     """mu, A/A0 of the built-in scene (eta = 0) at one velocity, through the stage's compute."""
-    from pipeline.stage import StageInput
-    from stages import psd as ps
+    from roughcontact.stage import StageInput
+    from roughcontact.stages import psd as ps
 
     values = sc.values
     get = lambda key: values[key.partition(".")[0]] if "." not in key else values[key.partition(".")[0]][key.partition(".")[2]]  # noqa: E731
@@ -326,7 +326,7 @@ def test_time_temperature_superposition(tmp_path):
 def test_friction_density_integrates_to_mu(tmp_path):
     """d mu / d ln q integrated over ln q gives mu (two second-order quadratures of the same integral,
     in q and in G, at 20 points per decade: agreement to 1e-5)."""
-    from stages.quadrature import integral
+    from roughcontact.physics.quadrature import integral
 
     raw = _scene(**{"friction.v": {"from": "1e-9 m/s", "to": "1e-6 m/s", "num": 4},
                     "outputs.variables": ["friction_coefficient", "friction_density"]})

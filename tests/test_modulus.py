@@ -7,10 +7,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from pipeline import cli, engine, scene as scenes, store
-from pipeline.errors import UserError
-from pipeline.stage import StageInput
-from stages import modulus as md
+from roughcontact import cli, engine, scene as scenes, store
+from roughcontact.errors import UserError
+from roughcontact.stage import StageInput
+from roughcontact.stages import modulus as md
 
 QUIET = engine.Reporter(None)
 

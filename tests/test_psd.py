@@ -7,9 +7,9 @@ import pytest
 import xarray as xr
 from hypothesis import given, settings, strategies as st
 
-from pipeline.errors import UserError
-from stages.psd import hrms_from_psd, psd_combined, self_affine_hrms_factor, self_affine_psd
-from stages.quadrature import log_grid
+from roughcontact.errors import UserError
+from roughcontact.physics.spectra import hrms_from_psd, psd_combined, self_affine_hrms_factor, self_affine_psd
+from roughcontact.physics.quadrature import log_grid
 
 from conftest import SURFACE, make_scene
 

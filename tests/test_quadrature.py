@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from stages.quadrature import cumulative_integral, integral, integral_to, log_grid, loglog_interp
+from roughcontact.physics.quadrature import cumulative_integral, integral, integral_to, log_grid, loglog_interp
 
 
 @given(s=st.floats(-6, 6), decades=st.floats(0.1, 8), ppd=st.integers(2, 60))

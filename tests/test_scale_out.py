@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from pipeline import engine, scene as scenes
-from pipeline.compute import auto_chunks
-from pipeline.stage import StageInput, stages
+from roughcontact import engine, scene as scenes
+from roughcontact.compute import auto_chunks
+from roughcontact.stage import StageInput, stages
 
 from conftest import SURFACE, make_scene
 

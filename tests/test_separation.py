@@ -16,12 +16,12 @@ from hypothesis import strategies as st
 from scipy.integrate import quad
 from scipy.special import erf
 
-from pipeline import cli
-from pipeline.scene import from_dict
-from pipeline.stage import StageInput, stages
-from stages.psd import psd_combined, self_affine_hrms_factor, self_affine_psd
-from stages.quadrature import gauss_legendre_panels, integral_to, inverse_cumulative_integral, log_grid
-from stages.separation import (
+from roughcontact import cli
+from roughcontact.scene import from_dict
+from roughcontact.stage import StageInput, stages
+from roughcontact.physics.spectra import psd_combined, self_affine_hrms_factor, self_affine_psd
+from roughcontact.physics.quadrature import gauss_legendre_panels, integral_to, inverse_cumulative_integral, log_grid
+from roughcontact.stages.separation import (
     EPSILON,
     mean_separation,
     separation_moments,

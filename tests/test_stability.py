@@ -17,8 +17,8 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
-from pipeline import engine, scene as scenes
-from pipeline.errors import UserError
+from roughcontact import engine, scene as scenes
+from roughcontact.errors import UserError
 
 from conftest import SURFACE, make_scene
 

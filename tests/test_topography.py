@@ -19,9 +19,9 @@ from hypothesis import strategies as st
 sys.path.insert(0, str(Path(__file__).parent))
 from _synthetic import self_affine, synthesize, wavevectors  # noqa: E402
 
-from pipeline import engine, scene  # noqa: E402
-from pipeline.errors import UserError  # noqa: E402
-from stages.topography import (  # noqa: E402
+from roughcontact import engine, scene  # noqa: E402
+from roughcontact.errors import UserError  # noqa: E402
+from roughcontact.stages.topography import (  # noqa: E402
     binned_spectra_area,
     binned_spectra_profiles,
     coherence,
@@ -389,7 +389,7 @@ def test_windowed_nonperiodic_map_matches_surfacetopography():
     ST = pytest.importorskip("SurfaceTopography")
     from SurfaceTopography.FFTTricks import get_window_2D
 
-    from stages.topography import hann_window_radial
+    from roughcontact.stages.topography import hann_window_radial
 
     nx, ny, sx, sy = 96, 80, 3e-6, 2.5e-6
     w = hann_window_radial(nx, ny, sx, sy)

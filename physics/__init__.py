@@ -1,0 +1,21 @@
+"""Pure numpy kernels of roughcontact: every equation the project implements.
+
+No registry, no xarray, no file I/O: each function takes arrays in SI units and returns
+arrays in SI units, with its equation, units and references in its docstring. The stages
+(:mod:`roughcontact.stages`) declare how scene keys and upstream results feed these
+functions; the theory they implement is stated in ``docs/theory.md``.
+
+Modules
+-------
+quadrature   the one quadrature of the project (piecewise power-law integrals on log grids)
+roots        the one bracketing root finder
+spectra      self-affine PSDs, the combined PSD of two surfaces, PSD conventions
+contact      G(zeta), A/A0, P(sigma) (non-adhesive contact)
+separation   mean interfacial separation u(p)
+adhesion     full-contact adhesion (effective surface energy)
+volterra     partial-contact adhesion (the marching Volterra solver)
+viscoelastic complex modulus models and temperature shifts
+friction     viscoelastic (hysteretic) rubber friction
+estimators   spectral estimators on measured maps and profiles (PSD, coherence)
+synthesis    random periodic surface pairs with given spectra and coherence
+"""

@@ -1,0 +1,1 @@
+"""Figures drawn from stored stage results (matplotlib is imported inside each function)."""

@@ -1,0 +1,215 @@
+"""What several stages share: the scene sections they all read, the coordinates they all
+write, and the values derived from scene keys (E*, the magnifications).
+
+Declared once here so that a key, a coordinate's units or E* cannot drift between stages.
+The sections: ``[substrate]`` and ``[solid]`` (the two surfaces), ``[interface]`` (their
+coherence eta), ``[material]`` (the elastic solid), ``[load]`` (the nominal pressure),
+``[contact]`` (the magnifications asked for), ``[grid]`` (the wavenumber grid) and the
+``points_per_decade`` setting of ``[numerics]``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from roughcontact.physics.contact import effective_modulus
+from roughcontact.physics.spectra import CONVENTIONS
+from roughcontact.stage import Param, Section, UserError, Var, register_coords, register_params, register_section
+
+# ----------------------------------------------------------------------------------------
+# Coordinates written by several stages
+# ----------------------------------------------------------------------------------------
+
+register_coords(
+    q=Var("1/m", "wavenumber"),
+    p=Var("Pa", "nominal pressure"),
+    eta=Var("1", "coherence of the two surfaces' roughness"),
+    zeta=Var("1", "magnification zeta = q/qL"),
+    hrms_substrate=Var("m", "rms roughness of the substrate"),
+    hrms_solid=Var("m", "rms roughness of the solid"),
+    v=Var("m/s", "sliding velocity"),
+    T=Var("K", "temperature"),
+    omega=Var("rad/s", "angular frequency"),
+)
+
+#: E*, stored by the stages whose results are read against it (p/E*)
+E_STAR = Var("Pa", "effective modulus E* = E/(1 - nu^2)")
+
+#: the scene keys E* is derived from
+MATERIAL_KEYS = ("material.E", "material.nu")
+
+
+def e_star(inp) -> float:
+    """E* of the scene's solid on a rigid substrate (Pa), from ``[material]`` (seed eq 3)."""
+    return float(effective_modulus(inp["material.E"], inp["material.nu"]))
+
+
+def zeta_values(inp, q: np.ndarray) -> np.ndarray:
+    """The magnifications ``[contact] zeta`` asks for on the wavenumber grid ``q`` (q[0] = qL):
+    every node of the grid for ``"all"``, else the given values, which must lie on the grid."""
+    zeta = inp["contact.zeta"]
+    if isinstance(zeta, str):
+        return q / q[0]
+    zeta = np.atleast_1d(np.asarray(zeta, dtype=float))
+    top = q[-1] / q[0]
+    if np.any(zeta > top * (1 + 1e-12)):
+        raise UserError(f"magnification {zeta.max():g} beyond the q grid (zeta <= q_max/qL = {top:.6g})", key="contact.zeta")
+    return zeta
+
+
+# ----------------------------------------------------------------------------------------
+# The two surfaces
+# ----------------------------------------------------------------------------------------
+
+SURFACES = ("substrate", "solid")
+
+
+def is_rough(spec) -> bool:
+    """Whether a surface section describes a rough surface (absent or ``smooth``: flat)."""
+    return spec is not None and spec.get("kind") != "smooth"
+
+
+def is_topography(spec) -> bool:
+    """Whether a surface section is a measured topography."""
+    return spec is not None and spec.get("kind") == "topography"
+
+
+def needs_topography(values) -> bool:
+    """Whether a scene (its section values) has a surface of kind 'topography'."""
+    return any(is_topography(values.get(name)) for name in SURFACES)
+
+
+def _check_surface(values: dict, key: str) -> None:
+    if values.get("kind") == "self_affine":
+        qL, q1 = values["qL"], values["q1"]
+        q0 = values.get("q0") if values.get("q0") is not None else qL
+        values["q0"] = q0
+        if not (qL <= q0 < q1):
+            raise UserError(f"needs qL <= q0 < q1, got qL={qL:g}, q0={q0:g}, q1={q1:g} 1/m", key=key)
+        has_h, has_c = values.get("hrms") is not None, values.get("C0") is not None
+        if has_h == has_c:
+            raise UserError("give exactly one of 'hrms' and 'C0'", key=key)
+
+
+SELF_AFFINE_PARAMS = (
+    Param("H", "quantity", "", lo=0.0, hi=1.0, lo_open=True, doc="Hurst exponent, 0 < H <= 1"),
+    Param("qL", "quantity", "1/m", lo=0.0, lo_open=True, doc="lowest wavenumber 2 pi / L"),
+    Param("q0", "quantity", "1/m", default=None, lo=0.0, lo_open=True, doc="roll-off wavenumber (default qL: no roll-off)"),
+    Param("q1", "quantity", "1/m", lo=0.0, lo_open=True, doc="upper cut-off wavenumber"),
+    Param("hrms", "sweep", "m", default=None, lo=0.0, lo_open=True, dim="hrms_{section}",
+          doc="rms roughness; a list is a sweep (dimension hrms_substrate / hrms_solid)"),
+    Param("C0", "quantity", "m^4", default=None, lo=0.0, lo_open=True, doc="PSD plateau C(q0) (instead of hrms)"),
+)
+PSD_FILE_PARAMS = (
+    Param("path", "path", doc="text/CSV file with q and C columns, or a NetCDF file with a q coordinate"),
+    Param("columns", "intlist", default=(0, 1), lo=0, doc="0-based column indices of q and C"),
+    Param("q_unit", "str", default=None, doc="unit of the q column (else from the header)"),
+    Param("C_unit", "str", default=None, doc="unit of the C column (else from the header)"),
+    Param("convention", "choice", default="persson", choices=tuple(CONVENTIONS), doc="PSD convention of the file"),
+    Param("hurst", "quantity", "", default=0.5, lo=0.0, hi=1.0, lo_open=True,
+          doc="Hurst exponent assumed by the '1d' (profile) conversion"),
+    Param("variable", "str", default=None, doc="NetCDF: name of the PSD variable (default: the only one over q)"),
+    Param("extend", "choice", default="none", choices=("none", "power_law", "zero"),
+          doc="how to extend beyond the file's q range (none: error)"),
+)
+#: polynomial detrending of measured maps, by name (degree of the polynomial removed)
+DETREND_DEGREE = {"mean": 0, "plane": 1, "curvature": 2}
+
+TOPOGRAPHY_PARAMS = (
+    Param("files", "paths", doc="height map(s) or line scan(s) of this surface, any format SurfaceTopography reads; "
+          "several files (e.g. several magnifications) are merged onto one q grid"),
+    Param("height_unit", "str", default=None, doc="unit of heights (and sizes) for files that do not say (npy, bare text)"),
+    Param("size_x", "quantity", "m", default=None, lo=0.0, lo_open=True, doc="scan length along x, for files that do not say"),
+    Param("size_y", "quantity", "m", default=None, lo=0.0, lo_open=True,
+          doc="scan length along y, for files that do not say (default: square pixels)"),
+    Param("periodic", "bool", default=None, doc="treat the data as periodic (default: as the file says; measurements are not)"),
+    Param("analysis", "choice", default="area", choices=("area", "profiles"),
+          doc="maps: 2D radial PSD ('area') or average of the line scans along x ('profiles'); line scans: always profiles"),
+    Param("detrend", "choice", default=None, choices=tuple(DETREND_DEGREE),
+          doc="polynomial removed before the FFT (default: mean if periodic, else plane)"),
+    Param("window", "choice", default=None, choices=("hann", "none"),
+          doc="window against edge leakage (default: hann if not periodic, else none)"),
+    Param("hurst", "quantity", "", default=0.5, lo=0.0, hi=1.0, lo_open=True,
+          doc="Hurst exponent assumed in the line-scan -> isotropic PSD conversion (exact for a self-affine surface)"),
+    Param("tip_radius", "quantity", "m", default=None, lo=0.0, lo_open=True,
+          doc="probe tip radius: drop wavelengths shorter than the tip-artefact cutoff (Sanner 2022)"),
+    Param("resolution", "quantity", "m", default=None, lo=0.0, lo_open=True,
+          doc="lateral resolution of the instrument: drop wavelengths shorter than it"),
+    Param("q_reliable", "quantity", "1/m", default=None, lo=0.0, lo_open=True, doc="drop wavenumbers above this"),
+    Param("extend", "choice", default="none", choices=("none", "power_law", "zero"),
+          doc="how the psd stage extends the measured PSD beyond its q range (none: error)"),
+)
+
+
+def _surface_section(name: str, doc: str) -> Section:
+    return Section(
+        name,
+        doc=doc,
+        optional=True,
+        discriminator="kind",
+        variants={"self_affine": SELF_AFFINE_PARAMS, "psd_file": PSD_FILE_PARAMS, "topography": TOPOGRAPHY_PARAMS,
+                  "smooth": ()},
+        check=_check_surface,
+    )
+
+
+register_section(_surface_section("substrate", "the hard, rough surface (absent or kind = 'smooth': flat)"))
+register_section(_surface_section("solid", "the elastic solid's surface (absent or kind = 'smooth': flat)"))
+
+# ----------------------------------------------------------------------------------------
+# Interface, solid, load, magnifications, grid
+# ----------------------------------------------------------------------------------------
+
+register_section(
+    Section(
+        "interface",
+        (Param("eta", "sweep", "", default=0.0, lo=-1.0, hi=1.0, choices=("measured",),
+               doc="coherence of the two surfaces; a list is a sweep; 'measured': eta(q) from paired topographies"),),
+        doc="how the two surfaces' roughness is correlated",
+    )
+)
+register_section(
+    Section(
+        "material",
+        (
+            Param("E", "quantity", "Pa", lo=0.0, lo_open=True, doc="Young's modulus of the elastic solid"),
+            Param("nu", "quantity", "", lo=-1.0, hi=0.5, lo_open=True, doc="Poisson ratio, -1 < nu <= 0.5"),
+        ),
+        doc="the elastic solid (the substrate is rigid)",
+    )
+)
+register_section(
+    Section(
+        "load",
+        (Param("p", "sweep", "Pa", lo=0.0, lo_open=True, doc="nominal pressure; a list or {from, to, num} is a sweep"),),
+        doc="the nominal squeezing pressure",
+    )
+)
+register_section(
+    Section(
+        "contact",
+        (
+            Param("zeta", "sweep", "", default="all", lo=1.0, choices=("all",),
+                  doc="magnification(s) zeta = q/qL; 'all': every node of the q grid"),
+        ),
+        doc="the magnifications at which contact and separation are computed",
+    )
+)
+register_section(
+    Section(
+        "grid",
+        (
+            Param("q_min", "quantity", "1/m", default=None, lo=0.0, lo_open=True,
+                  doc="lowest wavenumber of the q grid (qL of the system; default: lowest of the surfaces)"),
+            Param("q_max", "quantity", "1/m", default=None, lo=0.0, lo_open=True,
+                  doc="highest wavenumber (default: highest of the surfaces)"),
+        ),
+        doc="the wavenumber grid shared by all stages",
+    )
+)
+register_params(
+    "numerics",
+    Param("points_per_decade", "int", default=50, lo=2, presets={"fast": 20, "accurate": 100},
+          ladder=(10, 14, 20, 35, 50, 70, 100, 200, 400), doc="q grid points per decade"),
+    doc="resolution of the numerical methods",
+)
