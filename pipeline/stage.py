@@ -180,6 +180,7 @@ class StageInput:
 _STAGES: dict[str, Stage] = {}
 _SECTIONS: dict[str, Section] = {}
 _COORDS: dict[str, Var] = {}
+_LOADED = False  # True once every built-in stage module is imported and the declarations checked
 
 
 def register_coords(**declared: Var) -> None:
@@ -199,9 +200,14 @@ def coords() -> dict[str, Var]:
 
 
 def register(stage: Stage) -> Stage:
-    """Add a stage to the registry (at import of its module). Names are unique."""
+    """Add a stage to the registry (at import of its module). Names are unique.
+
+    A stage registered after the registry has loaded (a user's own stage) is checked at once;
+    the built-in ones are checked together when the registry loads."""
     if stage.name in _STAGES and _STAGES[stage.name] is not stage:
         raise ValueError(f"stage {stage.name!r} registered twice")
+    if _LOADED:
+        check_declarations({**_STAGES, stage.name: stage}, _SECTIONS, _COORDS)
     _STAGES[stage.name] = stage
     return stage
 
@@ -266,9 +272,6 @@ def _upstream_closure(st: Stage, all_stages: dict[str, Stage]) -> set[str]:
             seen.add(name)
             todo.extend(all_stages[name].requires)
     return seen
-
-
-_LOADED = False
 
 
 def _load_plugins() -> None:

@@ -1,0 +1,208 @@
+"""The layout rules of docs/architecture.md hold: one package, layers that import only
+downwards, no private imports, small modules and functions, metadata and scene keys declared
+once and checked, dimensions a stage couples never chunked, and the page's worked example runs."""
+
+from __future__ import annotations
+
+import ast
+import dataclasses
+import importlib.metadata
+import re
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+
+import roughcontact
+from roughcontact import engine, scene as scenes, stage as stage_api
+from roughcontact.stage import Stage, StageInput, Var
+
+from conftest import make_scene
+
+ROOT = Path(__file__).resolve().parent.parent
+LAYERS = {"pipeline": ROOT / "pipeline", "stages": ROOT / "stages", "physics": ROOT / "physics"}
+
+
+def _sources(layer: str):
+    return sorted(LAYERS[layer].rglob("*.py"))
+
+
+def _imports(path: Path):
+    """(module, names, level) of every import statement of a file."""
+    tree = ast.parse(path.read_text())
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                yield alias.name, (), 0
+        elif isinstance(node, ast.ImportFrom):
+            yield node.module or "", tuple(a.name for a in node.names), node.level
+
+
+def test_one_package_and_no_generic_top_level_module():
+    assert roughcontact.__version__
+    installed = [d for d in importlib.metadata.distributions(name="roughcontact")
+                 if str(getattr(d, "_path", "")).endswith(".dist-info")]  # not a build's egg-info in the checkout
+    assert installed, "roughcontact is not installed (pip install .)"
+    for dist in installed:
+        tops = {f.parts[0] for f in dist.files or [] if f.suffix == ".py" and len(f.parts) > 1}
+        assert tops <= {"roughcontact"}, f"the distribution installs other top-level packages: {tops}"
+        top_level = (dist.read_text("top_level.txt") or "roughcontact").split()
+        assert top_level == ["roughcontact"]
+    for name in ("roughcontact.engine", "roughcontact.stages.contact", "roughcontact.physics.contact"):
+        __import__(name)
+
+
+@pytest.mark.parametrize("layer", ["pipeline", "stages", "physics"])
+def test_layers_import_only_downwards(layer):
+    allowed_rc = {"pipeline": ("roughcontact",), "stages": ("roughcontact.stage", "roughcontact.physics"),
+                  "physics": ("roughcontact.physics",)}[layer]
+    forbidden_third_party = {"physics": ("xarray", "matplotlib", "dask", "netCDF4", "pint")}.get(layer, ())
+    bad = []
+    for path in _sources(layer):
+        for module, names, level in _imports(path):
+            where = f"{path.relative_to(ROOT)}: {'.' * level}{module} {names}"
+            if level == 0 and module.split(".")[0] in ("pipeline", "stages", "physics"):
+                bad.append(f"{where} (generic top-level name)")
+            if level == 0 and module.startswith("roughcontact") and not module.startswith(allowed_rc):
+                bad.append(where)
+            if level == 0 and module.split(".")[0] in forbidden_third_party:
+                bad.append(f"{where} (physics is pure numpy)")
+            if layer == "pipeline" and (module.split(".")[0] in ("physics", "stages") and level >= 1
+                                        or module.startswith(("roughcontact.physics", "roughcontact.stages"))):
+                bad.append(f"{where} (the engine reaches stages only through the registry)")
+            if level >= 2 and layer != "stages":
+                bad.append(f"{where} (leaves its layer)")
+            if layer == "stages" and level >= 2:
+                bad.append(f"{where} (use roughcontact.stage / roughcontact.physics)")
+    assert not bad, "\n".join(bad)
+
+
+def test_no_module_imports_a_private_name_of_another():
+    bad = []
+    for layer in LAYERS:
+        for path in _sources(layer):
+            for module, names, level in _imports(path):
+                private = [n for n in names if n.startswith("_") and not n.startswith("__")]
+                if private:
+                    bad.append(f"{path.relative_to(ROOT)}: from {'.' * level}{module} import {private}")
+    assert not bad, "\n".join(bad)
+
+
+def test_modules_and_functions_stay_small():
+    long_modules, long_functions = [], []
+    for layer in LAYERS:
+        for path in _sources(layer):
+            source = path.read_text()
+            if source.count("\n") > 450:
+                long_modules.append(f"{path.relative_to(ROOT)}: {source.count(chr(10))} lines")
+            for node in ast.walk(ast.parse(source)):
+                if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                    n = node.end_lineno - node.lineno + 1
+                    if n > 80:
+                        long_functions.append(f"{path.relative_to(ROOT)}:{node.lineno} {node.name}: {n} lines")
+    assert not long_modules and not long_functions, "\n".join(long_modules + long_functions)
+
+
+def test_E_star_is_derived_in_one_place():
+    callers = [p.relative_to(ROOT) for p in _sources("stages") if "effective_modulus(" in p.read_text()]
+    assert callers == [Path("stages/shared.py")]
+
+
+def test_every_declared_scene_key_exists_and_a_misspelt_one_is_caught():
+    registry, schema, shared = stage_api.stages(), stage_api.sections(), stage_api.coords()
+    stage_api.check_declarations(registry, schema, shared)
+    contact = registry["contact"]
+    misspelt = dataclasses.replace(contact, params=contact.params + ("material.poisson",))
+    with pytest.raises(ValueError, match=r"material\.poisson"):
+        stage_api.check_declarations({**registry, "contact": misspelt}, schema, shared)
+    no_section = dataclasses.replace(contact, params=("materials.E",))
+    with pytest.raises(ValueError, match=r"no scene section \[materials\]"):
+        stage_api.check_declarations({**registry, "contact": no_section}, schema, shared)
+    redeclared = dataclasses.replace(contact, coords={"p": Var("Pa", "pressure")})
+    with pytest.raises(ValueError, match="redeclares the shared coordinate"):
+        stage_api.check_declarations({**registry, "contact": redeclared}, schema, shared)
+    with pytest.raises(KeyError, match="does not declare"):
+        StageInput(params={"material.E": 1.0}, stage="contact")["material.nu"]
+
+
+def _toy(name, compute, **kwargs):
+    return Stage(name=name, version="1", compute=compute, requires=("psd",), **kwargs)
+
+
+@pytest.fixture
+def toy_registry(monkeypatch):
+    """Register toy stages for one test only."""
+    stage_api.stages()
+
+    def add(st):
+        monkeypatch.setitem(stage_api._STAGES, st.name, st)
+        return st
+
+    return add
+
+
+def _run(tmp_path, target):
+    sc = scenes.from_dict(make_scene(outputs={"variables": [target]}))
+    return engine.run(sc, tmp_path / "out", report=engine.Reporter(None))
+
+
+def test_engine_stamps_declared_metadata_and_refuses_what_a_stage_labels_itself(tmp_path, toy_registry):
+    declared = Var("m", "toy length", standard_name="toy_length_for_the_test")
+
+    def good(inp):
+        return xr.Dataset({"toy_length": xr.DataArray(np.arange(3.0), dims=("p",), coords={"p": [1.0, 2.0, 3.0]})})
+
+    toy_registry(_toy("toy_good", good, outputs={"toy_length": declared}))
+    ds = _run(tmp_path, "toy_length")["base"]["toy_good"]
+    assert {k: ds["toy_length"].attrs[k] for k in ("units", "long_name", "standard_name")} == declared.stamp()
+    assert ds["p"].attrs["units"] == "Pa" and ds["p"].attrs["long_name"] == "nominal pressure"
+
+    def labelled(inp):
+        return xr.Dataset({"toy_speed": xr.DataArray(1.0, attrs={"units": "km/h", "long_name": "speed"})})
+
+    toy_registry(_toy("toy_labelled", labelled, outputs={"toy_speed": Var("m/s", "toy speed")}))
+    with pytest.raises(RuntimeError, match="labels 'toy_speed' itself"):
+        _run(tmp_path, "toy_speed")
+
+    def stray(inp):
+        return xr.Dataset({"toy_mass": xr.DataArray([1.0], dims=("stray",), coords={"stray": [0.0]})})
+
+    toy_registry(_toy("toy_stray", stray, outputs={"toy_mass": Var("kg", "toy mass")}))
+    with pytest.raises(RuntimeError, match="coordinate 'stray' that nothing declares"):
+        _run(tmp_path, "toy_mass")
+
+
+def test_a_dimension_the_stage_couples_is_never_chunked(toy_registry):
+    raw = make_scene()
+    raw["numerics"]["chunks"] = {"p": 2, "eta": 1}
+    sc = scenes.from_dict(raw)
+    free = toy_registry(_toy("toy_free", lambda inp: None, outputs={"toy_a": Var("1", "a")}))
+    coupled = toy_registry(_toy("toy_coupled", lambda inp: None, outputs={"toy_b": Var("1", "b")}, unchunked=("p",)))
+    assert engine.stage_chunks(sc, free, {}) == {"p": 2, "eta": 1}
+    assert engine.stage_chunks(sc, coupled, {}) == {"eta": 1}
+    inp = StageInput(params={}, chunks=engine.stage_chunks(sc, coupled, {}))
+    assert inp.sweep("p", np.arange(9.0)).chunks is None
+
+
+def test_the_architecture_page_example_runs_as_written(tmp_path):
+    text = (ROOT / "docs" / "architecture.md").read_text()
+    blocks = re.findall(r"```python\n(.*?)```", text, flags=re.S)
+    assert len(blocks) == 1 and len(blocks[0].strip().splitlines()) <= 30
+    script = blocks[0] + textwrap.dedent(f"""
+        from roughcontact import engine, scene
+        sys_scene = scene.from_dict({make_scene(outputs={"variables": ["mean_contact_pressure"]})!r})
+        results = engine.run(sys_scene, __import__("pathlib").Path({str(tmp_path)!r}), report=engine.Reporter(None))
+        ds, contact = results["base"]["mean_pressure"], results["base"]["contact"]
+        assert ds["mean_contact_pressure"].attrs["units"] == "Pa"
+        expected = contact["p"] / contact["contact_area_ratio"]
+        np.testing.assert_allclose(ds["mean_contact_pressure"].values, expected.transpose(*ds["mean_contact_pressure"].dims).values, rtol=1e-15)
+        print("dims", ds["mean_contact_pressure"].dims)
+    """)
+    out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, cwd=tmp_path, timeout=300)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert (tmp_path / "mean_pressure.nc").is_file()
+    assert "dims" in out.stdout
