@@ -8,6 +8,8 @@
 * :func:`read_spectrum` reads a measured PSD (a text table or a NetCDF file) and returns
   q and C in SI units, checked row by row (units from the scene or the header, finite
   values, C >= 0, q > 0 and strictly increasing), errors naming the file and line.
+* :func:`read_master_curve` reads a measured viscoelastic master curve (frequency, E', E''
+  or tan delta columns) and returns omega [rad/s], E' and E'' [Pa], checked the same way.
 * :func:`read_topography` reads a measured surface (height map or line scan) in any of the
   instrument formats of the SurfaceTopography package (x3p, sdf, sur, opd, plu, datx,
   Gwyddion, Bruker/DI, text matrices, npy, NetCDF, ...).
@@ -375,5 +377,65 @@ def read_spectrum(path: Path, *, key: str, convention: str, convention_units: di
     return Spectrum(path=path, q=q, values=values, convention=convention, attrs=attrs)
 
 
+@dataclass
+class MasterCurve:
+    """A measured viscoelastic master curve at T_ref, in SI units: angular frequencies ``omega``
+    (rad/s, positive, strictly increasing), ``storage`` E' (Pa, > 0) and ``loss`` E'' (Pa, >= 0),
+    and ``attrs`` saying where they come from."""
+
+    path: Path
+    omega: np.ndarray
+    storage: np.ndarray
+    loss: np.ndarray
+    attrs: dict = field(default_factory=dict)
+
+
+_MASTER_HEADER = "# f [Hz]  E' [MPa]  E'' [MPa]"
+
+
+def read_master_curve(path: Path, *, key: str = "modulus", columns=(0, 1, 2), frequency_unit: str | None = None,
+                      modulus_unit: str | None = None, loss_column: str = "loss_modulus",
+                      frequency: str = "auto") -> MasterCurve:
+    """Read a master curve: a text table with columns ``columns`` = [frequency, E', E'' or tan
+    delta] (``loss_column`` says which). Units come from the scene (``frequency_unit``,
+    ``modulus_unit``) or else from the header (``# f [Hz]  E' [MPa]  E'' [MPa]``); the frequency
+    is angular or cyclic (omega = 2 pi f) as ``frequency`` says ("auto": angular if its unit
+    says rad). ``key`` is the scene section (errors name ``key.frequency_unit``, ...)."""
+    from .units import array_to_si
+
+    cols = tuple(columns)
+    if len(cols) != 3:
+        raise UserError(f"needs three column indices [frequency, E', E''], got {list(cols)}", key=f"{key}.columns")
+    table = read_table(path)
+    f_raw, s_raw, l_raw = (table.column(i) for i in cols)
+    units = table.units if table.units else [None] * table.data.shape[1]
+    f_unit, e_unit = frequency_unit or units[cols[0]], modulus_unit or units[cols[1]]
+    tan = loss_column == "tan_delta"
+    l_unit = None if tan else (units[cols[2]] if modulus_unit is None and units[cols[2]] is not None else e_unit)
+    for missing, what, name in ((not f_unit, "the frequency column", "frequency_unit"),
+                                (not e_unit or not l_unit and not tan, "the modulus columns", "modulus_unit")):
+        if missing:
+            raise UserError(f"unit of {what} unknown: put it in the header ({_MASTER_HEADER!r}) "
+                            f"or set {key}.{name}", file=str(table.path), key=f"{key}.{name}")
+    where = lambda i: f"line {table.lines[i]}"  # noqa: E731
+    for raw, name in ((f_raw, "frequency"), (s_raw, "E'"), (l_raw, "tan delta" if tan else "E''")):
+        first_bad(~np.isfinite(raw), lambda i: f"{name} is NaN or infinite", table.path, where)
+    angular = frequency == "angular" or frequency == "auto" and re.search(r"rad", f_unit) is not None
+    omega = array_to_si(f_raw, f_unit, "1/s", key=f"{key}.frequency_unit") * (1.0 if angular else 2.0 * np.pi)
+    storage = array_to_si(s_raw, e_unit, "Pa", key=f"{key}.modulus_unit")
+    first_bad(omega <= 0, lambda i: f"frequency must be positive, got {f_raw[i]:g}", table.path, where)
+    first_bad(np.diff(omega) <= 0, lambda i: f"frequency is not strictly increasing ({f_raw[i]:g} then "
+              f"{f_raw[i + 1]:g})", table.path, lambda i: where(i + 1))
+    first_bad(storage <= 0, lambda i: f"storage modulus E' must be positive, got {s_raw[i]:g}", table.path, where)
+    loss = storage * l_raw if tan else array_to_si(l_raw, l_unit, "Pa", key=f"{key}.modulus_unit")
+    loss_name = "tan delta" if tan else "loss modulus E''"
+    first_bad(l_raw < 0 if tan else loss < 0, lambda i: f"{loss_name} must be >= 0, got {l_raw[i]:g}", table.path, where)
+    if omega.size < 2:
+        raise UserError("a master curve needs at least two data rows", file=str(table.path))
+    kind = "angular" if angular else "cyclic: omega = 2 pi f"
+    return MasterCurve(path=table.path, omega=omega, storage=storage, loss=loss,
+                       attrs={"source_file": str(path), "frequency_column": f"{f_unit} ({kind})"})
+
+
 READERS = {"table": read_table, "netcdf": read_netcdf, "auto": read_auto, "topography": read_topography,
-           "spectrum": read_spectrum}
+           "spectrum": read_spectrum, "master_curve": read_master_curve}

@@ -26,7 +26,8 @@ sys.path.insert(0, str(__import__("pathlib").Path(__file__).resolve().parent.par
 
 from roughcontact import scene as scenes
 from roughcontact.stage import StageInput
-from roughcontact.stages import friction as fr
+from roughcontact.physics import friction as physics_friction
+from roughcontact.physics import viscoelastic as ve
 from roughcontact.stages import modulus as md
 from roughcontact.stages import psd as ps
 
@@ -75,8 +76,8 @@ def run_case(ppd: int, n_phi: int, v: np.ndarray, modulus_ppd: int = 20, repeat:
         t0 = time.process_time()
         mus, areas = [], []
         for i in range(0, v.size, chunk):
-            A, B = fr.angular_integrals(q, v[i:i + chunk], grid, Ep, Epp, n_phi)
-            mu, area = fr.friction_kernel(q, C[:, None, :], A[None], B[None], np.asarray(p), nu,
+            A, B = physics_friction.angular_integrals(q, v[i:i + chunk], grid, Ep, Epp, n_phi)
+            mu, area = physics_friction.friction_kernel(q, C[:, None, :], A[None], B[None], np.asarray(p), nu,
                                           segment_nodes=segment_nodes)
             mus.append(mu)
             areas.append(area)
@@ -120,9 +121,9 @@ def main(argv):
     for mppd in (10, 20, 40):
         q, C, grid, Ep, Epp, p, nu, spec = _inputs(50, mppd)
         w = np.geomspace(grid[0], grid[-1], 20001)
-        aT = 10.0 ** md.wlf_log10_shift(spec["T"], spec["T_ref"], spec["C1"], spec["C2"])
-        ea, eb = md.box_spectrum_modulus(w * aT, spec["E0"], spec["E_inf"], spec["tau1"], spec["tau2"])
-        a, b = md.modulus_at(w, grid, Ep, Epp)
+        aT = 10.0 ** ve.wlf_log10_shift(spec["T"], spec["T_ref"], spec["C1"], spec["C2"])
+        ea, eb = ve.box_spectrum_modulus(w * aT, spec["E0"], spec["E_inf"], spec["tau1"], spec["tau2"])
+        a, b = ve.modulus_at(w, grid, Ep, Epp)
         e_mu = "-" if quick else f"{np.max(np.abs(run_case(100, 48, v, modulus_ppd=mppd, repeat=1)[0] / mu80 - 1)):.2e}"
         print(f"| {mppd} | {np.max(np.abs(a / ea - 1)):.2e} | {np.max(np.abs(b / eb - 1)):.2e} | {e_mu} |", flush=True)
 

@@ -22,6 +22,8 @@ from roughcontact.errors import UserError
 from roughcontact.stages import friction as fr
 from roughcontact.stages import modulus as md
 from roughcontact.physics.contact import persson_G
+from roughcontact.physics import friction as physics_friction
+from roughcontact.physics import viscoelastic as ve
 from roughcontact.physics.quadrature import log_grid
 
 QUIET = engine.Reporter(None)
@@ -222,9 +224,9 @@ def _kernel_case(H, hrms, p, E0, ratio, tau2, v, n_phi=12, ppd=10, eta=0.0, corr
     C2 = C1 if H2 is None else hrms**2 * H2 / (np.pi * 1e8) * (q / 1e4) ** (-2 * (1 + H2))
     C = (np.sqrt(C1) - eta * np.sqrt(C2)) ** 2 + (1 - eta * eta) * C2
     grid = np.geomspace(1e-8, 1e22, 30 * 8 + 1)
-    Ep, Epp = md.box_spectrum_modulus(grid, E0, E0 * ratio, tau2 * 1e-10, tau2)
-    A, B = fr.angular_integrals(q, np.asarray(v), grid, Ep, Epp, n_phi)
-    return fr.friction_kernel(q, C, A, B, np.asarray(p), 0.5, correction, gamma)
+    Ep, Epp = ve.box_spectrum_modulus(grid, E0, E0 * ratio, tau2 * 1e-10, tau2)
+    A, B = physics_friction.angular_integrals(q, np.asarray(v), grid, Ep, Epp, n_phi)
+    return physics_friction.friction_kernel(q, C, A, B, np.asarray(p), 0.5, correction, gamma)
 
 
 velocities = st.lists(st.floats(-9, 3), min_size=2, max_size=6, unique=True).map(lambda xs: 10.0 ** np.sort(xs))
@@ -272,7 +274,7 @@ def test_angular_integrals_of_a_constant_modulus_are_exact():
     q = np.geomspace(1e3, 1e6, 7)
     grid = np.geomspace(1e-3, 1e12, 61)
     E = np.full(grid.size, 3e6)
-    A, B = fr.angular_integrals(q, np.asarray([1e-3, 1.0]), grid, E, np.zeros(grid.size), 3)
+    A, B = physics_friction.angular_integrals(q, np.asarray([1e-3, 1.0]), grid, E, np.zeros(grid.size), 3)
     np.testing.assert_allclose(A, np.pi / 2 * 9e12, rtol=1e-14)
     assert np.all(B == 0)
 

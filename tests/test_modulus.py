@@ -9,6 +9,7 @@ from hypothesis import strategies as st
 
 from roughcontact import cli, engine, scene as scenes, store
 from roughcontact.errors import UserError
+from roughcontact.physics import viscoelastic as ve
 from roughcontact.stage import StageInput
 from roughcontact.stages import modulus as md
 
@@ -47,8 +48,8 @@ omegas = st.lists(st.floats(-30, 30), min_size=1, max_size=20).map(lambda xs: 10
 def test_box_conjugate_symmetry_and_positive_loss(w, E0, ratio, t1, decades):
     tau1 = 10.0**t1
     tau2 = tau1 * 10.0**decades
-    Ep, Epp = md.box_spectrum_modulus(w, E0, E0 * ratio, tau1, tau2)
-    Em, Emm = md.box_spectrum_modulus(-w, E0, E0 * ratio, tau1, tau2)
+    Ep, Epp = ve.box_spectrum_modulus(w, E0, E0 * ratio, tau1, tau2)
+    Em, Emm = ve.box_spectrum_modulus(-w, E0, E0 * ratio, tau1, tau2)
     assert np.all(np.isfinite(Ep)) and np.all(np.isfinite(Epp))
     np.testing.assert_array_equal(Em, Ep)
     np.testing.assert_array_equal(Emm, -Epp)
@@ -63,8 +64,8 @@ def test_prony_conjugate_symmetry_positive_loss_and_monotone_storage(w, E0, term
     Ek = np.array([t[0] for t in terms])
     tk = 10.0 ** np.array([t[1] for t in terms])
     w = np.sort(w)
-    Ep, Epp = md.prony_modulus(w, E0, Ek, tk)
-    Em, Emm = md.prony_modulus(-w, E0, Ek, tk)
+    Ep, Epp = ve.prony_modulus(w, E0, Ek, tk)
+    Em, Emm = ve.prony_modulus(-w, E0, Ek, tk)
     np.testing.assert_array_equal(Em, Ep)
     np.testing.assert_array_equal(Emm, -Epp)
     assert np.all(Epp >= 0)
@@ -76,11 +77,11 @@ def test_box_matches_complex_log_formula_and_limits():
     E0, Ei, t1, t2 = 2e6, 1e9, 1e-5, 1e2
     w = np.geomspace(1e-3, 1e6, 41)
     E = E0 + (Ei - E0) / np.log(t2 / t1) * (np.log(1 + 1j * w * t2) - np.log(1 + 1j * w * t1))
-    Ep, Epp = md.box_spectrum_modulus(w, E0, Ei, t1, t2)
+    Ep, Epp = ve.box_spectrum_modulus(w, E0, Ei, t1, t2)
     np.testing.assert_allclose(Ep, E.real, rtol=1e-12)
     np.testing.assert_allclose(Epp, E.imag, rtol=1e-12)
-    lo = md.box_spectrum_modulus(1e-12, E0, Ei, t1, t2)
-    hi = md.box_spectrum_modulus(1e20, E0, Ei, t1, t2)
+    lo = ve.box_spectrum_modulus(1e-12, E0, Ei, t1, t2)
+    hi = ve.box_spectrum_modulus(1e20, E0, Ei, t1, t2)
     assert lo[0] == pytest.approx(E0, rel=1e-12) and hi[0] == pytest.approx(Ei, rel=1e-12)
     # terminal behaviours: E'' ~ omega (tau2 - tau1) D at low, ~ D (1/tau1 - 1/tau2)/omega at high
     D = (Ei - E0) / np.log(t2 / t1)
@@ -92,7 +93,7 @@ def test_prony_matches_complex_formula():
     E0, Ek, tk = 1e6, np.array([3e6, 5e7, 2e8]), np.array([1e-4, 1e-1, 10.0])
     w = np.geomspace(1e-4, 1e7, 23)
     E = E0 + (Ek * 1j * w[:, None] * tk / (1 + 1j * w[:, None] * tk)).sum(-1)
-    Ep, Epp = md.prony_modulus(w, E0, Ek, tk)
+    Ep, Epp = ve.prony_modulus(w, E0, Ek, tk)
     np.testing.assert_allclose(Ep, E.real, rtol=1e-12)
     np.testing.assert_allclose(Epp, E.imag, rtol=1e-12)
 
@@ -105,15 +106,15 @@ def test_prony_matches_complex_formula():
 def test_modulus_at_reproduces_the_box_to_1e5_at_20_points_per_decade():
     E0, Ei, t1, t2 = 5e6, 3e9, 1e-16, 1e-6
     grid = np.geomspace(1e-6, 1e19, 25 * 20 + 1)
-    Sp, Sl = md.box_spectrum_modulus(grid, E0, Ei, t1, t2)
+    Sp, Sl = ve.box_spectrum_modulus(grid, E0, Ei, t1, t2)
     w = np.geomspace(1e-12, 1e25, 5001)
-    a, b = md.modulus_at(w, grid, Sp, Sl)
-    ea, eb = md.box_spectrum_modulus(w, E0, Ei, t1, t2)
+    a, b = ve.modulus_at(w, grid, Sp, Sl)
+    ea, eb = ve.box_spectrum_modulus(w, E0, Ei, t1, t2)
     assert np.max(np.abs(a / ea - 1)) < 2e-5
     assert np.max(np.abs(b / eb - 1)) < 2e-5
     # nodes are reproduced exactly; negative frequency gives the conjugate
-    np.testing.assert_allclose(md.modulus_at(grid, grid, Sp, Sl)[0], Sp, rtol=1e-13)
-    na, nb = md.modulus_at(-w, grid, Sp, Sl)
+    np.testing.assert_allclose(ve.modulus_at(grid, grid, Sp, Sl)[0], Sp, rtol=1e-13)
+    na, nb = ve.modulus_at(-w, grid, Sp, Sl)
     np.testing.assert_array_equal(na, a)
     np.testing.assert_array_equal(nb, -b)
 
@@ -124,10 +125,10 @@ def test_extrapolation_follows_the_physical_asymptotes():
     Sl = np.linspace(1e5, 1e8, grid.size)
     low = np.array([1e-6, 1e-3])
     high = np.array([1e6, 1e9])
-    a, b = md.modulus_at(low, grid, Sp, Sl)
+    a, b = ve.modulus_at(low, grid, Sp, Sl)
     np.testing.assert_allclose(a, Sp[0])
     np.testing.assert_allclose(b, Sl[0] * low / grid[0])
-    a, b = md.modulus_at(high, grid, Sp, Sl)
+    a, b = ve.modulus_at(high, grid, Sp, Sl)
     np.testing.assert_allclose(a, Sp[-1])
     np.testing.assert_allclose(b, Sl[-1] * grid[-1] / high)
 
@@ -149,7 +150,7 @@ def test_wlf_identity_through_the_stage(tmp_path):
     for i in range(1, aT.size):
         reduced = grid * aT[i]
         inside = (reduced > grid[0]) & (reduced < grid[-1])
-        a, b = md.modulus_at(reduced[inside], grid, ref_p, ref_l)
+        a, b = ve.modulus_at(reduced[inside], grid, ref_p, ref_l)
         np.testing.assert_allclose(ds["storage_modulus"].values[i][inside], a, rtol=3e-5)
         np.testing.assert_allclose(ds["loss_modulus"].values[i][inside], b, rtol=3e-5)
 

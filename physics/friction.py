@@ -1,0 +1,247 @@
+"""Hysteretic rubber friction mu(v) and the relative contact area A/A0(v) while sliding, for an
+elastic (viscoelastic) solid and a hard substrate that may both be rough.
+
+With omega = q v cos(phi) (the seed's eq 30 is misprinted) and k = 1 / ((1 - nu^2) sigma0):
+
+.. math::
+
+    \\mu(v) = 2k \\int_{q_0}^{q_1} dq\\, q^3 C(q) P(q) S(q) \\int_0^{\\pi/2} d\\phi \\cos\\phi\\,
+              E''(q v \\cos\\phi)
+
+    G(q; v) = \\frac{k^2}{2} \\int_{q_0}^{q} dq'\\, q'^3 C(q') \\int_0^{\\pi/2} d\\phi\\,
+              |E(q' v \\cos\\phi)|^2
+
+    P(q) = \\mathrm{erf}(1 / (2\\sqrt{G(q)})), \\qquad A/A_0 = P(q_1),
+
+which are the seed's eqs 61-62 (eqs 29-32 for one rough surface; C is the combined PSD of
+eq 52) with the angular integrals over [0, 2 pi] folded onto [0, pi/2] (E(-omega) =
+conj E(omega)), |E|^2 instead of the seed's "Im|E|^2" and the upper limit q instead of q_a in G
+(seed misprints in eqs 32/62). S = 1 is the 2001 theory (the seed); S = gamma + (1 - gamma) P^2
+is the later correction (Persson's papers from 2004 on, gamma ~ 1/2).
+
+See docs/theory.md section 6; Persson, J. Chem. Phys. 115, 3840 (2001).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.special import erf
+
+from .quadrature import cumulative_integral, gauss_legendre, running_weighted_integral
+from .viscoelastic import modulus_at
+
+
+def _k(sigma0, nu):
+    """k = 1 / ((1 - nu^2) sigma0) (1/Pa)."""
+    return 1.0 / ((1.0 - nu * nu) * np.asarray(sigma0, dtype=float))
+
+
+def angular_integrals(q, v, omega_grid, storage, loss, n_phi):
+    """The two angular integrals of eqs 61-62, by Gauss-Legendre on [0, pi/2].
+
+    .. math::
+
+        A(q; v) = \\int_0^{\\pi/2} |E(q v \\cos\\phi)|^2 d\\phi, \\qquad
+        B(q; v) = \\int_0^{\\pi/2} \\cos\\phi\\, E''(q v \\cos\\phi)\\, d\\phi
+
+    Parameters
+    ----------
+    q : array (n,)
+        Wavenumbers (1/m).
+    v : array (...)
+        Sliding velocities (m/s), > 0.
+    omega_grid : array (m,)
+        Geometric angular-frequency grid of the modulus (rad/s).
+    storage, loss : arrays (..., m)
+        E' and E'' on that grid (Pa); leading axes broadcast against ``v``.
+    n_phi : int
+        Gauss-Legendre nodes in phi.
+
+    Returns
+    -------
+    (A, B) : arrays (..., n)
+        A in Pa^2, B in Pa.
+
+    References
+    ----------
+    docs/theory.md section 6; seed eqs 29, 32, 61, 62.
+    """
+    q = np.asarray(q, dtype=float)
+    v = np.asarray(v, dtype=float)
+    storage = np.asarray(storage, dtype=float)
+    loss = np.asarray(loss, dtype=float)
+    phi, weight = gauss_legendre(0.0, 0.5 * np.pi, n_phi)
+    cos = np.cos(phi)
+    lead = np.broadcast_shapes(v.shape, storage.shape[:-1])
+    omega = v[..., None, None] * q[:, None] * cos  # (..., n, n_phi)
+    omega = np.broadcast_to(omega, lead + (q.size, cos.size)).reshape(lead + (q.size * cos.size,))
+    Ep, Epp = modulus_at(omega, omega_grid, storage, loss)
+    Ep = Ep.reshape(lead + (q.size, cos.size))
+    Epp = Epp.reshape(lead + (q.size, cos.size))
+    A = (Ep * Ep + Epp * Epp) @ weight
+    B = (Epp * cos) @ weight
+    return A, B
+
+
+def sliding_G(q, C, A, sigma0, nu):
+    """G(q; v) of the corrected eq 62 (dimensionless).
+
+    .. math:: G(q; v) = \\frac{k^2}{2} \\int_{q_0}^{q} q'^3 C(q') A(q'; v)\\, dq', \\qquad
+              k = \\frac{1}{(1 - \\nu^2)\\sigma_0}
+
+    For a real constant modulus E it equals Persson's elastic G (eq 17) divided by sigma0^2.
+
+    Parameters
+    ----------
+    q : array (n,)
+        Wavenumbers (1/m).
+    C : array (..., n)
+        Combined PSD (m^4).
+    A : array (..., n)
+        Angular integral of |E|^2 from :func:`angular_integrals` (Pa^2).
+    sigma0 : array (...)
+        Nominal pressure (Pa).
+    nu : float
+        Poisson's ratio (dimensionless).
+
+    Returns
+    -------
+    array (..., n)
+        G (dimensionless), G(q0) = 0.
+
+    References
+    ----------
+    docs/theory.md section 6; seed eqs 32, 62 (corrected).
+    """
+    k = _k(sigma0, nu)
+    return 0.5 * k[..., None] ** 2 * cumulative_integral(q, np.asarray(q) ** 3 * C * A)
+
+
+def contact_fraction(G):
+    """Relative contact area at magnification q, P(q) = erf(1/(2 sqrt G)) (dimensionless).
+
+    Parameters
+    ----------
+    G : array
+        G(q; v) of :func:`sliding_G` (dimensionless), >= 0; G = 0 gives 1 (full contact at the
+        largest scale).
+
+    References
+    ----------
+    docs/theory.md section 6; seed eq 31.
+    """
+    G = np.asarray(G, dtype=float)
+    with np.errstate(divide="ignore"):
+        return erf(np.where(G > 0, 0.5 / np.sqrt(np.where(G > 0, G, 1.0)), np.inf))
+
+
+def area_factor(P, correction: str, gamma: float):
+    """The factor S(q) in mu (dimensionless).
+
+    .. math:: S = 1 \\ (\\text{none}), \\qquad S = \\gamma + (1 - \\gamma) P^2 \\ (\\text{yang\\_persson})
+
+    Parameters
+    ----------
+    P : array
+        P(q) of :func:`contact_fraction` (dimensionless).
+    correction : {"none", "yang_persson"}
+        The seed's 2001 theory (S = 1) or the later correction.
+    gamma : float
+        gamma of the correction (dimensionless, ~ 1/2).
+
+    References
+    ----------
+    docs/theory.md section 6; seed eq 29 (S = 1, Persson 2001); the correction S is Persson's
+    from 2004 on.
+    """
+    if correction == "none":
+        return np.ones_like(P)
+    return gamma + (1.0 - gamma) * P * P
+
+
+def friction_integrand(q, C, P, S, B, sigma0, nu):
+    """d mu / d q of eq 61 (1/m): 2 k q^3 C P S B, k = 1/((1 - nu^2) sigma0).
+
+    Parameters
+    ----------
+    q : array (n,)
+        Wavenumbers (1/m).
+    C : array (..., n)
+        Combined PSD of the pair (m^4).
+    P, S : arrays (..., n)
+        :func:`contact_fraction` and :func:`area_factor` (dimensionless).
+    B : array (..., n)
+        Angular integral of cos(phi) E'' from :func:`angular_integrals` (Pa).
+    sigma0 : array (...)
+        Nominal pressure (Pa).
+    nu : float
+        Poisson's ratio (dimensionless).
+
+    References
+    ----------
+    docs/theory.md section 6; seed eqs 29, 61.
+    """
+    k = _k(sigma0, nu)
+    return 2.0 * k[..., None] * np.asarray(q) ** 3 * C * P * S * B
+
+
+def friction_kernel(q, C, A, B, sigma0, nu, correction="none", gamma=0.5, extras=False, segment_nodes=12):
+    """mu(v) and A/A0(v) from the PSD and the angular integrals (eqs 61-62, 31).
+
+    mu is integrated in the variable G: with dG/dq = (k^2/2) q^3 C A,
+
+    .. math:: \\mu = 2k \\int q^3 C P S B\\, dq = \\frac{4}{k} \\int P(G) S(G) \\frac{B}{A}\\, dG,
+
+    segment by segment by :func:`roughcontact.physics.quadrature.running_weighted_integral`
+    (``segment_nodes`` Gauss-Legendre nodes per q segment). This keeps second-order accuracy
+    where P(q) falls like 1/sqrt(q - q0) just above q0 (high velocities: G grows by orders of
+    magnitude in the first q segment), where power-law quadrature of the integrand in q is only
+    first order.
+
+    Parameters
+    ----------
+    q : array (n,)
+        Wavenumber grid of the PSD (1/m), from q0 to q1.
+    C : array (..., n)
+        Combined PSD of the two surfaces (m^4, seed eq 52).
+    A, B : arrays (..., n)
+        The angular integrals of :func:`angular_integrals` (Pa^2, Pa).
+    sigma0 : array (...)
+        Nominal pressure (Pa), the load of the sliding contact.
+    nu : float
+        Poisson's ratio (dimensionless).
+    correction, gamma
+        The factor S of :func:`area_factor`.
+    extras : bool
+        Also return G(q; v) and d mu / d ln q.
+    segment_nodes : int
+        Gauss-Legendre nodes per q segment.
+
+    Returns
+    -------
+    (mu, area) or (mu, area, G, dmu_dlnq)
+        Friction coefficient and A/A0 (dimensionless, shape (...)) and, with ``extras``,
+        G and d mu / d ln q over q (dimensionless, (..., n)).
+
+    References
+    ----------
+    docs/theory.md section 6; seed eqs 29-32, 61-62 (corrected); Persson, J. Chem. Phys. 115,
+    3840 (2001).
+    """
+    k = _k(sigma0, nu)
+    g = 0.5 * k[..., None] ** 2 * np.asarray(q) ** 3 * C * A
+    with np.errstate(divide="ignore", invalid="ignore"):
+        r = np.where(A > 0, B / np.where(A > 0, A, 1.0), 0.0)
+
+    def weight(G):
+        P = contact_fraction(G)
+        return P * area_factor(P, correction, gamma)
+
+    I, G = running_weighted_integral(q, g, r, weight, nodes=segment_nodes)
+    mu = 4.0 / k * I
+    P = contact_fraction(G)
+    area = P[..., -1]
+    if extras:
+        S = area_factor(P, correction, gamma)
+        return mu, area, G, friction_integrand(q, C, P, S, B, sigma0, nu) * np.asarray(q)
+    return mu, area

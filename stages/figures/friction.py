@@ -1,0 +1,116 @@
+"""Figures of the friction stage: the PSDs (seed Fig. 6), mu(v) and A/A0(v) for substrate-only
+vs both rough (seed Figs 8, 9) and for correlated roughness eta = 0, +1, -1 (seed Figs 10, 11)."""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+
+
+def _first(da: xr.DataArray, keep: tuple[str, ...]) -> tuple[xr.DataArray, str]:
+    """Reduce every dimension but ``keep`` to its first value; say which in a note."""
+    notes = []
+    for dim in list(da.dims):
+        if dim not in keep:
+            value = da[dim].values[0]
+            notes.append(f"{dim} = {value:.4g}" if dim != "T" else f"T = {value - 273.15:.4g} °C")
+            da = da.isel({dim: 0})
+    return da, ", ".join(notes)
+
+
+def _curves(results, which: str, etas: tuple[float, ...] | None):
+    """(label, DataArray over v, note) for substrate-only (if etas is None) and the pair's eta values."""
+    out = []
+    base = results["base"]["friction"]
+    if etas is None:
+        if "substrate_only" in results:
+            da, note = _first(results["substrate_only"]["friction"][which], ("v",))
+            out.append(("substrate only", da, note))
+        etas = (0.0,)
+    for eta in etas:
+        da = base[which]
+        if "eta" in da.dims:
+            hits = np.flatnonzero(np.isclose(da["eta"].values, eta))
+            if not hits.size:
+                continue
+            da = da.isel(eta=int(hits[0]))
+            label = "both rough, uncorrelated (eta = 0)" if eta == 0 else f"both rough, eta = {eta:+g}"
+        else:
+            label = "as in the scene"
+        da, note = _first(da, ("v",))
+        out.append((label, da, note))
+    return out
+
+
+def _friction_figure(results, which, etas, title, ylabel, logy=False):
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(5.8, 4.3))
+    notes = set()
+    for (label, da, note), marker in zip(_curves(results, which, etas), "o*+xsd"):
+        ax.semilogx(da["v"].values, da.values, marker=marker, markersize=4, label=label)
+        if note:
+            notes.add(note)
+    ax.set_xlabel("sliding velocity v (m/s)")
+    ax.set_ylabel(ylabel)
+    ax.set_title(title + (f"\n({'; '.join(sorted(notes))})" if notes else ""), fontsize=10)
+    if logy:
+        ax.set_yscale("log")
+    else:
+        ax.set_ylim(bottom=0)
+    ax.grid(True, which="both" if logy else "major", alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def figure_mu_substrate(results):
+    return _friction_figure(results, "friction_coefficient", None,
+                            "Friction: substrate only vs both rough (seed Fig. 8)", "friction coefficient mu")
+
+
+def figure_area_substrate(results):
+    return _friction_figure(results, "sliding_contact_area_ratio", None,
+                            "Contact area while sliding (seed Fig. 9)", "A / A0", logy=True)
+
+
+def figure_mu_eta(results):
+    return _friction_figure(results, "friction_coefficient", (0.0, 1.0, -1.0),
+                            "Friction for correlated roughness (seed Fig. 10)", "friction coefficient mu")
+
+
+def figure_area_eta(results):
+    return _friction_figure(results, "sliding_contact_area_ratio", (0.0, 1.0, -1.0),
+                            "Contact area for correlated roughness (seed Fig. 11)", "A / A0", logy=True)
+
+
+def figure_psds(results):
+    import matplotlib.pyplot as plt
+
+    psd = results["base"]["psd"]
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4.2))
+    for ax, name, title in ((axes[0], "solid", "(a) elastic solid (rubber)"), (axes[1], "substrate", "(b) substrate")):
+        da, note = _first(psd[f"psd_{name}"], ("q",))
+        q = da["q"].values
+        C = da.values
+        mask = C > 0
+        if not np.any(mask):
+            ax.text(0.5, 0.5, "smooth", transform=ax.transAxes, ha="center")
+        else:
+            ax.loglog(q[mask], C[mask], "-", label="C(q)")
+            H = da.attrs.get("H")
+            if H is not None:
+                q0 = float(da.attrs.get("q0", q[mask][0]))
+                ref = C[mask][np.searchsorted(q[mask], q0)] if q0 >= q[mask][0] else C[mask][0]
+                qq = q[mask][q[mask] >= q0]
+                ax.loglog(qq, 3.0 * ref * (qq / q0) ** (-2.0 * (1.0 + H)), "--",
+                          label=f"slope -2(1+H) = {-2 * (1 + H):.2f}")
+            hrms = float(np.sqrt(2 * np.pi * np.trapezoid(q * np.where(mask, C, 0.0), q)))
+            ax.set_title(f"{title}: hrms = {hrms * 1e6:.3g} um" + (f" ({note})" if note else ""), fontsize=10)
+            ax.legend(fontsize=8)
+        ax.set_xlabel("wavenumber q (1/m)")
+        ax.set_ylabel("C(q) (m^4)")
+        ax.grid(True, alpha=0.3)
+    fig.suptitle("Power spectral densities (seed Fig. 6)")
+    fig.tight_layout()
+    return fig
