@@ -111,7 +111,7 @@ CONVENTIONS = {
         "m^3",
         "C(q) = c(H) C1D(q) / q, c(H) = Gamma(1+H) / (2 pi^1.5 Gamma(H+1/2)) (= 1/(4 pi) at H = 1/2), from a "
         "1D profile PSD with hrms^2 = (1/pi) int_0^inf C1D dq; exact only for an isotropic self-affine "
-        "surface with that Hurst exponent (docs/theory.md's C1D/(pi q) is 4x too large)",
+        "surface with that Hurst exponent (the earlier statement C1D/(pi q) is 4x too large)",
     ),
 }
 
