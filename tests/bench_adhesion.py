@@ -20,9 +20,9 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from roughcontact.stages.adhesion import (  # noqa: E402
-    _Problem, effective_modulus, layer_resolving_offset, solve_partial_contact, vanishing_scale, zeta_grid,
-)
+from roughcontact.physics.adhesion import AdhesionProblem, layer_resolving_offset, zeta_grid  # noqa: E402
+from roughcontact.physics.contact import effective_modulus  # noqa: E402
+from roughcontact.physics.volterra import solve_partial_contact, vanishing_scale  # noqa: E402
 from roughcontact.physics.spectra import psd_combined, self_affine_hrms_factor, self_affine_psd  # noqa: E402
 from roughcontact.physics.quadrature import log_grid  # noqa: E402
 
@@ -43,7 +43,7 @@ def curve(hs, ppd, offset, K_min, q_ppd):
     q, shape = setup(q_ppd)
     C = hs[:, None] ** 2 * shape
     offset = layer_resolving_offset(q, C, E_STAR, DG, offset, K_min)  # as the stage does
-    prob = _Problem(q, C, E_STAR, DG, zeta_grid(Q1 / Q0, ppd, offset))
+    prob = AdhesionProblem(q, C, E_STAR, DG, zeta_grid(Q1 / Q0, ppd, offset))
     t0 = time.perf_counter()
     sol = solve_partial_contact(prob, 0.0, np.ones(hs.size), np.zeros(hs.size), K_min=K_min)
     return time.perf_counter() - t0, sol["K"], sol["P"][:, -1]

@@ -10,10 +10,11 @@ from scipy.special import erf
 
 from roughcontact import engine, scene as scenes
 from roughcontact.errors import ComputationError, UserError
-from roughcontact.stages.adhesion import (
-    _Problem, adhesion_length, detachment_volterra, layer_resolving_offset, effective_modulus, gamma_eff_full_contact, solve_partial_contact,
-    surface_area_factor, vanishing_scale, zeta_grid,
+from roughcontact.physics.adhesion import (
+    AdhesionProblem, adhesion_length, gamma_eff_full_contact, layer_resolving_offset, surface_area_factor, zeta_grid,
 )
+from roughcontact.physics.contact import effective_modulus
+from roughcontact.physics.volterra import detachment_volterra, solve_partial_contact, vanishing_scale
 from roughcontact.physics.spectra import psd_combined, self_affine_hrms_factor, self_affine_psd
 from roughcontact.physics.quadrature import log_grid
 
@@ -27,7 +28,7 @@ ANG = 1e-10
 
 def _solve(hs, ppd=6, sigma0=0.0, c0=1.0, c1=0.0):
     hs = np.atleast_1d(hs)
-    prob = _Problem(Q, hs[:, None] ** 2 * SHAPE, E_STAR, DG, zeta_grid(Q1 / Q0, ppd, 1e-10))
+    prob = AdhesionProblem(Q, hs[:, None] ** 2 * SHAPE, E_STAR, DG, zeta_grid(Q1 / Q0, ppd, 1e-10))
     n = hs.size
     return prob, solve_partial_contact(prob, sigma0, np.full(n, c0), np.full(n, c1))
 
@@ -77,7 +78,7 @@ def test_layer_resolving_offset():
     C = (18 * ANG) ** 2 * SHAPE[None, :]
     small = layer_resolving_offset(Q, C, E_STAR, DG, 1e-10, 1e-14)
     assert small < 1e-10
-    prob = _Problem(Q, C, E_STAR, DG, zeta_grid(Q1 / Q0, 6, small))
+    prob = AdhesionProblem(Q, C, E_STAR, DG, zeta_grid(Q1 / Q0, 6, small))
     assert prob.a[0, 1] <= 1.0001e-3 * 1e-14 * prob.F[0]
 
 
@@ -138,7 +139,7 @@ def test_self_consistency_of_the_solution():
 def test_flat_surfaces_give_full_adhesion():
     """No roughness (identical surfaces, eta = 1: combined PSD exactly 0): gamma_eff = Delta_gamma, P = 1."""
     C = psd_combined(SHAPE * (5 * ANG) ** 2, SHAPE * (5 * ANG) ** 2, 1.0)[None, :]
-    prob = _Problem(Q, C, E_STAR, DG, zeta_grid(Q1 / Q0, 6, 1e-10))
+    prob = AdhesionProblem(Q, C, E_STAR, DG, zeta_grid(Q1 / Q0, 6, 1e-10))
     sol = solve_partial_contact(prob, 0.0, np.ones(1), np.zeros(1))
     assert sol["K"][0] == pytest.approx(1.0, abs=1e-9)
     assert np.all(sol["P"] == 1.0)
@@ -158,7 +159,7 @@ def test_yang_persson_model_runs_and_differs():
 
 def test_non_convergence_raises_computation_error_with_residual():
     hs = np.array([14.0]) * ANG
-    prob = _Problem(Q, hs[:, None] ** 2 * SHAPE, E_STAR, DG, zeta_grid(Q1 / Q0, 6, 1e-10))
+    prob = AdhesionProblem(Q, hs[:, None] ** 2 * SHAPE, E_STAR, DG, zeta_grid(Q1 / Q0, 6, 1e-10))
     with pytest.raises(ComputationError, match="residual"):
         solve_partial_contact(prob, 0.0, np.ones(1), np.zeros(1), maxiter=1)
 
@@ -206,7 +207,7 @@ def test_extremes_are_finite_and_bounded(Hx, log_h, log_dg, eta, ratio):
     q = log_grid(q0, q1, 8)
     unit = self_affine_psd(q, Hx, q0, q0, q1, 1.0) / self_affine_hrms_factor(Hx, q0, q0, q1)
     C = psd_combined((10**log_h) ** 2 * unit, (ratio * 10**log_h) ** 2 * unit, eta)
-    prob = _Problem(q, C[None, :], E_STAR, 10**log_dg, zeta_grid(q1 / q0, 4, 1e-10))
+    prob = AdhesionProblem(q, C[None, :], E_STAR, 10**log_dg, zeta_grid(q1 / q0, 4, 1e-10))
     sol = solve_partial_contact(prob, 0.0, np.ones(1), np.zeros(1))
     assert np.all(np.isfinite(sol["P"])) and np.all((sol["P"] >= 0) & (sol["P"] <= 1))
     assert 0.0 <= sol["K"][0] <= prob.F[0] + 1e-12
@@ -326,7 +327,7 @@ def test_figures_draw(tmp_path):
     import matplotlib
 
     matplotlib.use("Agg")
-    from roughcontact.stages.adhesion import figure_one_surface, figure_two_surfaces
+    from roughcontact.stages.figures.adhesion import figure_one_surface, figure_two_surfaces
 
     raw = _raw(["5 angstrom", "12 angstrom", "20 angstrom"],
                solid={"kind": "self_affine", "H": 0.8, "qL": "7e6 1/m", "q1": "1.4e9 1/m", "hrms": "6 angstrom"},
