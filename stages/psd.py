@@ -23,14 +23,8 @@ from roughcontact.physics.spectra import (
 )
 from roughcontact.stage import FileInput, Stage, StageInput, UserError, Var, register
 
-from .shared import is_rough, needs_topography
+from .shared import SURFACES, is_rough, needs_topography
 from .topography import measured_coherence_on_grid, measured_psd_on_grid
-
-# ----------------------------------------------------------------------------------------
-# Stage wrapper
-# ----------------------------------------------------------------------------------------
-
-_SURFACES = {"substrate": "1", "solid": "2"}
 
 
 def _measured(name: str, spec: dict, spectrum, q_grid: np.ndarray) -> tuple[np.ndarray, dict]:
@@ -59,7 +53,7 @@ def _measured(name: str, spec: dict, spectrum, q_grid: np.ndarray) -> tuple[np.n
 
 def _q_range(inp: StageInput) -> tuple[float, float, list[float]]:
     lows, highs, knots = [], [], []
-    for name in _SURFACES:
+    for name in SURFACES:
         spec = inp[name]
         if not is_rough(spec):
             continue
@@ -90,7 +84,7 @@ def compute_psd(inp: StageInput) -> xr.Dataset:
     q_values = log_grid(lo, hi, inp["numerics.points_per_decade"], knots)
     q = xr.DataArray(q_values, dims=("q",))
     surfaces: dict[str, xr.DataArray] = {}
-    for name, index in _SURFACES.items():
+    for name in SURFACES:
         spec = inp[name]
         if not is_rough(spec):
             da = xr.zeros_like(q)

@@ -8,7 +8,7 @@ import xarray as xr
 from hypothesis import given, settings, strategies as st
 
 from roughcontact.errors import UserError
-from roughcontact.physics.spectra import hrms_from_psd, psd_combined, self_affine_hrms_factor, self_affine_psd
+from roughcontact.physics.spectra import CONVENTIONS, hrms_from_psd, psd_combined, self_affine_hrms_factor, self_affine_psd
 from roughcontact.physics.quadrature import log_grid
 
 from conftest import SURFACE, make_scene
@@ -108,7 +108,9 @@ def test_measured_psd_file_conventions_convert_to_persson(run_scene, tmp_path, c
     expected = A * psd["q"].values ** (-2 * (1 + H))
     assert np.allclose(psd["psd_substrate"].values, expected, rtol=1e-8)
     assert convention in psd["psd_substrate"].attrs["psd_convention"]
-    assert "H = 1/2" in psd["psd_substrate"].attrs["conversion"] if convention == "1d" else True
+    # the file records the conversion that was applied, and only that one
+    assert psd["psd_substrate"].attrs["conversion"] == CONVENTIONS[convention][1]
+    assert len({text for _, text in CONVENTIONS.values()}) == len(CONVENTIONS)
 
 
 def test_measured_psd_units_from_scene_and_header_agree(run_scene, tmp_path):

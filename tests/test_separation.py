@@ -21,7 +21,7 @@ from roughcontact.scene import from_dict
 from roughcontact.stage import StageInput, stages
 from roughcontact.physics.spectra import psd_combined, self_affine_hrms_factor, self_affine_psd
 from roughcontact.physics.quadrature import gauss_legendre_panels, integral_to, inverse_cumulative_integral, log_grid
-from roughcontact.stages.separation import (
+from roughcontact.physics.separation import (
     EPSILON,
     mean_separation,
     separation_moments,
@@ -302,12 +302,13 @@ def test_zeta_all_matches_listed_magnifications():
     assert np.all(below.values < listed.sel(zeta=4.0).values) and np.all(listed.sel(zeta=4.0).values < above.values)
 
 
-def test_dask_chunks_give_the_same_result_and_units():
+def test_dask_chunks_give_the_same_result_and_units(run_scene, tmp_path):
+    # through the engine: it stamps the declared units and long names on what the stage returns
     p = list(np.geomspace(1e3, 1e9, 12))
-    plain = run_in_memory(seed_scene(p))
+    plain = {v: res["separation"] for v, res in run_scene(seed_scene(p), outdir=tmp_path / "plain").items()}
     raw = seed_scene(p)
     raw["numerics"]["chunks"] = {"p": 5, "eta": 1}
-    chunked = run_in_memory(raw)
+    chunked = {v: res["separation"] for v, res in run_scene(raw, outdir=tmp_path / "chunked").items()}
     for v in ("base", "substrate_only"):
         np.testing.assert_allclose(chunked[v]["mean_separation"].values, plain[v]["mean_separation"].values, rtol=1e-14)
         for name in plain[v].variables:

@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import copy
 import os
+import subprocess
+import sys
 import tempfile
 from pathlib import Path
 
@@ -109,7 +111,34 @@ def test_out_of_range_input_is_a_clear_error_not_a_nan(overrides, key):
     assert err.value.key == key or err.value.key.startswith(key)
 
 
-@pytest.mark.slow
-def test_exhaustive_profile_is_available():
+_COUNT_EXAMPLES = """
+import sys
+import numpy as np
+import xarray as xr
+sys.path.insert(0, sys.argv[1])
+import test_stability as t
+ones, zeros = xr.DataArray(np.ones(1)), xr.DataArray(np.zeros(1))
+result = {"base": {"contact": {"contact_area_ratio": ones, "stress_distribution": zeros},
+                   "separation": {"mean_separation": zeros},
+                   "friction": {"friction_coefficient": zeros, "sliding_contact_area_ratio": ones}}}
+calls = []
+t._run = lambda raw: calls.append(raw) or result
+for test in (t.test_contact_and_separation_are_finite_and_bounded,
+             t.test_friction_is_finite_and_bounded_across_velocity_and_glass_transition):
+    calls.clear()
+    test()
+    print(len(calls))
+"""
+
+
+def test_exhaustive_profile_is_available(tmp_path):
     # the slow run: HYPOTHESIS_PROFILE=exhaustive python -m pytest -m slow tests/test_stability.py
-    assert settings.get_profile("exhaustive").max_examples >= 300
+    # must draw >= 300 examples in each property test above: import this module afresh with that
+    # environment, replace the pipeline run by a stub that counts the scenes it is handed, and
+    # run the two property tests
+    env = dict(os.environ, HYPOTHESIS_PROFILE="exhaustive")
+    done = subprocess.run([sys.executable, "-c", _COUNT_EXAMPLES, str(Path(__file__).resolve().parent)], env=env,
+                          cwd=tmp_path, capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr
+    counts = [int(n) for n in done.stdout.split()]
+    assert len(counts) == 2 and min(counts) >= settings.get_profile("exhaustive").max_examples >= 300, counts
