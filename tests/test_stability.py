@@ -72,6 +72,9 @@ def test_contact_and_separation_are_finite_and_bounded(H1, H2, eta, decades, log
 
 
 FRICTION = scenes.load("friction").raw
+_WLF = scenes.load("friction").values["modulus"]
+#: below this temperature the scene's WLF shift exceeds 10^100 (MAX_LOG10_SHIFT) and must be refused
+WLF_LIMIT_DEGC = _WLF["T_ref"] - 100.0 * _WLF["C2"] / (100.0 + _WLF["C1"]) - 273.15 + 1e-9
 
 
 @settings.get_profile(PROFILE)
@@ -79,7 +82,8 @@ FRICTION = scenes.load("friction").raw
        T=st.floats(-100.0, 150.0), eta=coherence, logp=st.floats(3.0, 8.0))
 def test_friction_is_finite_and_bounded_across_velocity_and_glass_transition(logv, T, eta, logp):
     # T from 57 K below to 193 K above Tg = -42.9 C: below T_ref - C2 (-94.5 C) WLF is singular and
-    # near it a_T leaves any physical range: there the user must get a clear error naming modulus.T
+    # near it a_T leaves any physical range (|log10 a_T| > 100 below T_ref - 100 C2/(100 + C1) =
+    # -86.84 C): there, and only there, the user must get a clear error naming modulus.T
     raw = copy.deepcopy(FRICTION)
     raw.pop("variants", None)
     raw["friction"]["v"] = [f"{10**x!r} m/s" for x in sorted(logv)]
@@ -90,7 +94,7 @@ def test_friction_is_finite_and_bounded_across_velocity_and_glass_transition(log
     try:
         res = _run(raw)["base"]["friction"]
     except UserError as exc:
-        assert exc.key == "modulus.T" and T < -90.0, exc
+        assert exc.key == "modulus.T" and T < WLF_LIMIT_DEGC, exc
         return
     mu = res["friction_coefficient"].values
     area = res["sliding_contact_area_ratio"].values
