@@ -24,7 +24,7 @@ from roughcontact.physics.spectra import (
 from roughcontact.stage import FileInput, Stage, StageInput, UserError, Var, register
 
 from .shared import is_rough, needs_topography
-from .topography import measured_coherence_on_grid, measured_psd_on_grid
+from .maps import measured_coherence_on_grid, measured_psd_on_grid
 
 # ----------------------------------------------------------------------------------------
 # Stage wrapper
