@@ -17,5 +17,7 @@ volterra     partial-contact adhesion (the marching Volterra solver)
 viscoelastic complex modulus models and temperature shifts
 friction     viscoelastic (hysteretic) rubber friction
 estimators   spectral estimators on measured maps and profiles (PSD, coherence)
-synthesis    random periodic surface pairs with given spectra and coherence
+preprocessing  detrending, windows and the tip-radius cutoff of measured scans
+synthesis    random periodic surface pairs with given spectra and coherence; band limit of a map
+bem          the exact FFT boundary-element contact solve (tamaas, optional)
 """

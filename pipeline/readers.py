@@ -154,20 +154,21 @@ class Topography:
     path
         The file.
     heights
-        Heights, ``(nx,)`` for a line scan or ``(nx, ny)`` for a map, x first (the layout of
-        SurfaceTopography). In metres when ``unit`` is known; raw numbers when the file does
-        not say its unit (``unit is None``). Missing points (masked in the file) are NaN.
+        Heights (m), ``(nx,)`` for a line scan or ``(nx, ny)`` for a map, x first (the layout
+        of SurfaceTopography). Missing points (masked in the file) are NaN.
     physical_sizes
-        Lengths of the scan along x (and y), in metres when ``unit`` is known, in the file's
-        numbers otherwise; None when the file does not give them.
+        Lengths of the scan along x (and y) (m); None when the file does not give them.
     periodic
         Whether the file says the data are periodic (simulations; measurements never are).
     unit
-        The file's length unit as written in it (e.g. ``"um"``), or None.
+        The length unit the heights were given in (e.g. ``"um"``): the file's, or the scene's
+        ``height_unit`` for a file that does not say.
     format, channel
         The reader (format) that recognised the file and the channel read (the default one).
     metadata
         The file's metadata (instrument, date, ...), as JSON-able values.
+    unit_source
+        Where ``unit`` comes from: ``"file"`` or ``"scene"``.
     """
 
     path: Path
@@ -178,6 +179,7 @@ class Topography:
     format: str
     channel: str
     metadata: dict = field(default_factory=dict)
+    unit_source: str = "file"
 
     @property
     def dim(self) -> int:
@@ -221,13 +223,13 @@ def _explain_by_suffix(path: Path) -> None:
                             file=str(path)) from None
 
 
-def read_topography(path: Path) -> Topography:
+def read_topography(path: Path, *, key: str = "surface", height_unit: str | None = None) -> Topography:
     """Read a height map or line scan with SurfaceTopography (default channel).
 
-    Heights and sizes are converted to metres when the file gives its unit; otherwise they
-    are returned as raw numbers with ``unit = None`` and the stage applies the unit the
-    scene gives. Errors (unknown format, corrupt or truncated file, non-uniform data) are
-    :class:`UserError` naming the file.
+    Heights and sizes are converted to metres with the file's unit, or, for a file that does
+    not say its unit (npy, bare text), with ``height_unit`` from the scene section ``key``
+    (errors name ``key.height_unit``). Errors (unknown format, corrupt or truncated file,
+    non-uniform data, no unit) are :class:`UserError` naming the file.
     """
     path = Path(path)
     try:
@@ -279,16 +281,21 @@ def read_topography(path: Path) -> Topography:
     if heights.size == 0:
         raise UserError("the file holds no height data", file=str(path))
     sizes_out = tuple(float(s) for s in np.atleast_1d(sizes)) if sizes is not None else None
-    if unit is not None:
-        from .units import array_to_si
+    source, unit_key = "file", f"unit {unit!r} in the file"
+    if unit is None:
+        if height_unit is None:
+            raise UserError(f"the file does not say the unit of its heights; set {key}.height_unit (e.g. \"nm\")",
+                            file=str(path), key=f"{key}.height_unit")
+        unit, source, unit_key = height_unit, "scene", f"{key}.height_unit"
+    from .units import array_to_si
 
-        factor = float(array_to_si(np.array(1.0), unit, "m", key=f"unit {unit!r} in the file"))
-        heights *= factor
-        sizes_out = tuple(s * factor for s in sizes_out) if sizes_out is not None else None
+    factor = float(array_to_si(np.array(1.0), unit, "m", key=unit_key))
+    heights *= factor
+    sizes_out = tuple(s * factor for s in sizes_out) if sizes_out is not None else None
     return Topography(
         path=path, heights=heights, physical_sizes=sizes_out, periodic=periodic, unit=unit,
         format=type(reader).__name__.removesuffix("Reader"), channel=str(getattr(channel, "name", channel.index)),
-        metadata=info,
+        metadata=info, unit_source=source,
     )
 
 

@@ -23,8 +23,8 @@ from roughcontact.physics.spectra import (
 )
 from roughcontact.stage import FileInput, Stage, StageInput, UserError, Var, register
 
+from .maps import measured_coherence_on_grid, measured_psd_on_grid
 from .shared import SURFACES, is_rough, needs_topography
-from .topography import measured_coherence_on_grid, measured_psd_on_grid
 
 
 def _measured(name: str, spec: dict, spectrum, q_grid: np.ndarray) -> tuple[np.ndarray, dict]:

@@ -21,7 +21,8 @@ CHILD = r"""
 import json, resource, sys, time
 import numpy as np
 sys.path.insert(0, {root!r})
-from roughcontact.stages.bem import grid_band, solve_contact, synthesize_pair
+from roughcontact.physics.bem import solve_contact
+from roughcontact.physics.synthesis import grid_band, synthesize_pair
 from roughcontact.physics.spectra import self_affine_hrms_factor, self_affine_psd
 import tamaas
 n = {n}

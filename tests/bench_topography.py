@@ -36,7 +36,7 @@ def _maps(n):
 
 
 def _task(name, n, queue):
-    from roughcontact.stages.topography import binned_spectra_area, log_bin_edges
+    from roughcontact.physics.estimators import binned_spectra_area, log_bin_edges
 
     h1, h2, L = np.load(_CACHE.format(1)), np.load(_CACHE.format(2)), _L
     edges = log_bin_edges(2 * np.pi / L, np.pi * n / L, 20)
@@ -50,15 +50,16 @@ def _task(name, n, queue):
     elif name == "psd+cross":
         run = lambda: binned_spectra_area(h1, L, L, edges, np.pi * n / L, h2)  # noqa: E731
     else:  # the whole stage path for one non-periodic map: checks, plane detrend, radial Hann window, PSD
+        from roughcontact.physics.estimators import binned_spectra_area as spectra
         from roughcontact.readers import Topography
-        from roughcontact.stages.topography import _prepare, _process, _spectra
+        from roughcontact.stages.maps import prepare_map, process_map
 
         topo = Topography(Path("bench"), h1, (L, L), False, "m", "bench", "0")
         spec = {"analysis": "area", "hurst": 0.5}
 
         def run():
-            p = _process(_prepare("substrate", spec, topo, 0), spec)
-            return _spectra(p, edges, spec)
+            p = process_map(prepare_map("substrate", spec, topo, 0), spec)
+            return spectra(p["h"], p["sizes"][0], p["sizes"][1], edges, p["q_max"])
     before = _rss_now()
     best = np.inf
     for _ in range(REPEAT):
@@ -103,7 +104,7 @@ def main(n=4096):
     print(f"{'task':24s} {'time (s)':>9s} {'ratio to ST':>12s} {'peak extra RSS (map sizes)':>28s}")
     for name, best, mem, _ in results.values():
         print(f"{name:24s} {best:9.2f} {best / ref:12.2f} {mem / map_bytes:28.2f}")
-    from roughcontact.stages.topography import log_bin_edges
+    from roughcontact.physics.estimators import log_bin_edges
 
     edges = log_bin_edges(2 * np.pi / _L, np.pi * n / _L, 20)
     a, b = results["psd"][3], results["surfacetopography"][3]

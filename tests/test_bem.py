@@ -20,22 +20,21 @@ from hypothesis import strategies as st
 
 from roughcontact import cli
 from roughcontact.errors import UserError
-from roughcontact.stages.bem import (
-    EXTRA,
+from roughcontact.physics.bem import contact_pair, solve_contact
+from roughcontact.physics.estimators import pair_coherence
+from roughcontact.physics.spectra import self_affine_psd
+from roughcontact.physics.synthesis import (
     band_limit,
-    contact_pair,
-    figure_bem_comparison,
     fourier_refine,
     grid_band,
     lattice_wavenumbers,
-    map_band,
-    pair_coherence,
     psd_on_lattice,
-    solve_contact,
     synthesize_pair,
     white_noise_pair,
 )
-from roughcontact.physics.spectra import self_affine_psd
+from roughcontact.stages.bem import EXTRA, solve_pair
+from roughcontact.stages.figures.bem import figure_bem_comparison
+from roughcontact.stages.maps import map_band
 
 # a self-affine PSD in reduced units: qL = 1 (map side 2 pi), roll-off at 4, cut-off 100
 Q = np.geomspace(1.0, 100.0, 201)
@@ -277,7 +276,7 @@ def test_random_pairs_bounded_or_user_error(eta, log_p, seed):
     pytest.importorskip("tamaas")
     h1, h2 = synthesize_pair(Q, C_SHAPE, 0.3 * C_SHAPE, eta, 16, 6.0, seed=seed)
     try:
-        res = contact_pair(h1, h2, 2 * np.pi / 16, 1.0, [10.0**log_p * np.std(h1 - h2)])
+        res = solve_pair(h1, h2, 2 * np.pi / 16, 1.0, [10.0**log_p * np.std(h1 - h2)])
     except UserError as exc:
         assert exc.key == "load.p" and "single pixel" in exc.message
         return

@@ -21,17 +21,16 @@ from _synthetic import self_affine, synthesize, wavevectors  # noqa: E402
 
 from roughcontact import engine, scene  # noqa: E402
 from roughcontact.errors import UserError  # noqa: E402
-from roughcontact.stages.topography import (  # noqa: E402
+from roughcontact.physics.estimators import (  # noqa: E402
     binned_spectra_area,
     binned_spectra_profiles,
     coherence,
-    detrend,
-    isotropic_factor,
     log_bin_edges,
     merge_spectra,
     psd_map,
-    tip_radius_cutoff,
 )
+from roughcontact.physics.preprocessing import detrend, tip_radius_cutoff  # noqa: E402
+from roughcontact.physics.spectra import isotropic_factor  # noqa: E402
 
 L = 10e-6  # 10 um scans
 
@@ -389,7 +388,7 @@ def test_windowed_nonperiodic_map_matches_surfacetopography():
     ST = pytest.importorskip("SurfaceTopography")
     from SurfaceTopography.FFTTricks import get_window_2D
 
-    from roughcontact.stages.topography import hann_window_radial
+    from roughcontact.physics.preprocessing import hann_window_radial
 
     nx, ny, sx, sy = 96, 80, 3e-6, 2.5e-6
     w = hann_window_radial(nx, ny, sx, sy)

@@ -1,0 +1,432 @@
+"""Spectral estimators on measured (or synthesized) height maps and line scans.
+
+* 2D maps: C(q) = (2 pi)^-2 \\int d^2x <h(x) h(0)> exp(-i q.x) (Persson, seed eq 4) is
+  estimated as the radial average of (dx dy)^2 |DFT h|^2 / ((2 pi)^2 Lx Ly) over the Fourier
+  modes in log-spaced bins of |q|. Discretely, sum_q C(q) (2 pi)^2 / (Lx Ly) = <h^2> (Parseval).
+* Line scans: C1D(q) = (dx^2 / L) |DFT h|^2 (hrms^2 = (1/pi) \\int_0^inf C1D dq), converted to
+  the isotropic 2D PSD with C(q) = c(H) C1D(q) / q
+  (:func:`roughcontact.physics.spectra.isotropic_factor`).
+* Pairs h1, h2 on the same grid: the cross-spectrum C12 (radial average of Re h1(q) h2(q)*,
+  same normalisation) and the coherence eta(q) = C12 / sqrt(C11 C22) (seed eq 41).
+* Periodic square maps: the binned coherence of a pair and the rms slope (the BEM check).
+
+The scans are prepared (detrended, windowed) by :mod:`roughcontact.physics.preprocessing`.
+See docs/theory.md, section "Spectra", and docs/topography.md (estimators, errors, tests).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import scipy.fft
+
+from .spectra import extend_psd, isotropic_factor
+from .synthesis import half_plane_weights, lattice_wavenumbers
+
+# ----------------------------------------------------------------------------------------
+# Spectra on log bins
+# ----------------------------------------------------------------------------------------
+
+
+def log_bin_edges(q_lo: float, q_hi: float, bins_per_decade: int) -> np.ndarray:
+    """Edges 10^(k / bins_per_decade) (1/m) of the fixed logarithmic bins covering [q_lo, q_hi].
+
+    Bin i holds edges[i-1] < |q| <= edges[i]. The lattice does not depend on the data, so
+    spectra of several files share bins.
+
+    Parameters
+    ----------
+    q_lo, q_hi : float
+        Range to cover (1/m).
+    bins_per_decade : int
+        Bins per factor 10 in q.
+
+    Returns
+    -------
+    array
+        Edges (1/m), increasing.
+    """
+    k0 = math.floor(bins_per_decade * math.log10(q_lo)) - 1
+    k1 = math.ceil(bins_per_decade * math.log10(q_hi)) + 1
+    return 10.0 ** (np.arange(k0, k1 + 1) / bins_per_decade)
+
+
+def psd_map(h, sx, sy):
+    """Full 2D PSD of a map in Persson's convention (m^4), in ``numpy.fft.fft2`` layout.
+
+    .. math:: C(\\mathbf{q}) = \\frac{(dx\\,dy)^2 |\\mathrm{DFT}\\,h|^2}{(2\\pi)^2 L_x L_y},
+              \\quad \\sum_q C \\frac{(2\\pi)^2}{L_x L_y} = \\langle h^2 \\rangle
+
+    Parameters
+    ----------
+    h : array (nx, ny)
+        Heights (m).
+    sx, sy : float
+        Physical sizes Lx, Ly (m).
+
+    References
+    ----------
+    Seed eq 4; docs/theory.md, section "Spectra".
+    """
+    nx, ny = h.shape
+    area_per_pt = (sx / nx) * (sy / ny)
+    return area_per_pt**2 * np.abs(np.fft.fft2(h)) ** 2 / ((2.0 * np.pi) ** 2 * sx * sy)
+
+
+def _bincount(idx, weights, nbins):
+    return np.bincount(idx.ravel(), weights=None if weights is None else weights.ravel(), minlength=nbins + 1)[: nbins + 1]
+
+
+def binned_spectra_area(h1, sx, sy, edges, q_max, h2=None):
+    """Radially binned 2D spectra of a map (and of a second map on the same grid).
+
+    The mean over the Fourier modes in each bin of :func:`psd_map` (and of the
+    cross-spectrum Re H1 H2*, same normalisation), seed eqs 4 and 41.
+
+    Parameters
+    ----------
+    h1, h2 : array (nx, ny)
+        Prepared (detrended, windowed) heights (m); ``h2`` optional.
+    sx, sy : float
+        Physical sizes (m).
+    edges : array
+        Bin edges (1/m), see :func:`log_bin_edges`.
+    q_max : float
+        Modes with |q| > q_max (1/m; Nyquist or reliability cutoff) are left out.
+
+    Returns
+    -------
+    dict of arrays over the bins (len(edges) - 1)
+        ``n`` independent Fourier modes (a mode and its conjugate count once), ``q`` the mean
+        |q| of the modes (1/m), ``C11`` (and ``C22``, ``C12`` = Re cross-spectrum) the mean
+        PSD in Persson's convention (m^4); NaN where a bin holds no mode.
+
+    Notes
+    -----
+    Real-to-complex FFT over y; interior columns stand for themselves and their conjugates
+    (weight 2), so averages equal those over the full Fourier plane. Peak memory: the input
+    plus about three map-sizes of temporaries.
+    """
+    nx, ny = h1.shape
+    norm = ((sx / nx) * (sy / ny)) ** 2 / ((2.0 * np.pi) ** 2 * sx * sy)
+    qx = 2.0 * np.pi * np.fft.fftfreq(nx, d=sx / nx)
+    qy = 2.0 * np.pi * np.fft.rfftfreq(ny, d=sy / ny)
+    w = half_plane_weights(ny)
+    q = np.sqrt(qx[:, None] ** 2 + qy[None, :] ** 2)
+    nb = edges.size - 1
+    idx = np.searchsorted(edges, q)  # bin i+1 <-> edges[i] < q <= edges[i+1]; 0 and nb+1: outside
+    idx[(q > q_max) | (q == 0.0)] = nb + 1  # dropped
+    idx[idx > nb + 1] = nb + 1
+    wfull = np.broadcast_to(w, q.shape)
+    count = _bincount(idx, wfull, nb + 1)
+    qsum = _bincount(idx, q * wfull, nb + 1)
+    del q
+    out = {}
+    H1 = scipy.fft.rfft2(h1)
+    P = H1.real**2 + H1.imag**2
+    P *= w
+    out["C11"] = _bincount(idx, P, nb + 1)
+    if h2 is not None:
+        H2 = scipy.fft.rfft2(h2)
+        np.multiply(H2.real, H2.real, out=P)
+        P += H2.imag**2
+        P *= w
+        out["C22"] = _bincount(idx, P, nb + 1)
+        np.multiply(H1.real, H2.real, out=P)
+        P += H1.imag * H2.imag
+        P *= w
+        out["C12"] = _bincount(idx, P, nb + 1)
+        del H2
+    del H1, P, idx
+    sl = slice(1, nb + 1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        res = {k: np.where(count[sl] > 0, v[sl] * norm / count[sl], np.nan) for k, v in out.items()}
+        res["q"] = np.where(count[sl] > 0, qsum[sl] / count[sl], np.nan)
+    res["n"] = count[sl] / 2.0
+    return res
+
+
+def binned_spectra_profiles(h1, sx, edges, q_max, hurst, h2=None):
+    """Binned isotropic PSD from line scans along x.
+
+    The 1D PSD C1D = (dx^2/L) |DFT h|^2 per mode and profile is converted by
+    C = c(H) C1D / q (:func:`roughcontact.physics.spectra.isotropic_factor`) and averaged over
+    profiles and bins.
+
+    Parameters
+    ----------
+    h1, h2 : array (nx,) or (nx, n_profiles)
+        Prepared (detrended, windowed) heights (m); ``h2`` optional.
+    sx : float
+        Scan length along x (m).
+    edges : array
+        Bin edges (1/m).
+    q_max : float
+        Highest wavenumber used (1/m).
+    hurst : float
+        H of the conversion (dimensionless), exact for an isotropic self-affine surface.
+
+    Returns
+    -------
+    dict
+        As :func:`binned_spectra_area`; ``n`` counts one independent mode per positive
+        wavenumber per profile (profiles are taken as independent).
+    """
+    h1 = h1.reshape(h1.shape[0], -1)
+    nx, nprof = h1.shape
+    norm = (sx / nx) ** 2 / sx
+    qx = 2.0 * np.pi * np.fft.rfftfreq(nx, d=sx / nx)
+    nb = edges.size - 1
+    idx = np.searchsorted(edges, qx)
+    idx[(qx > q_max) | (qx == 0.0)] = nb + 1
+    idx[idx > nb + 1] = nb + 1
+    conv = np.zeros_like(qx)
+    conv[qx > 0] = isotropic_factor(hurst) / qx[qx > 0]
+    count = np.bincount(idx, minlength=nb + 2)[: nb + 2] * float(nprof)
+    qsum = np.bincount(idx, weights=qx * nprof, minlength=nb + 2)[: nb + 2]
+    H1 = scipy.fft.rfft(h1, axis=0)
+    out = {"C11": (np.abs(H1) ** 2).sum(axis=1)}
+    if h2 is not None:
+        H2 = scipy.fft.rfft(h2.reshape(nx, -1), axis=0)
+        out["C22"] = (np.abs(H2) ** 2).sum(axis=1)
+        out["C12"] = (H1.real * H2.real + H1.imag * H2.imag).sum(axis=1)
+    sl = slice(1, nb + 1)
+    res = {}
+    with np.errstate(invalid="ignore", divide="ignore"):
+        for k, v in out.items():
+            s = np.bincount(idx, weights=v * conv * norm, minlength=nb + 2)[: nb + 2]
+            res[k] = np.where(count[sl] > 0, s[sl] / count[sl], np.nan)
+        res["q"] = np.where(count[sl] > 0, qsum[sl] / count[sl], np.nan)
+    res["n"] = count[sl]
+    return res
+
+
+def second_surface_hurst(spectra, hurst1, hurst2):
+    """Paired line-scan spectra converted with H1 (:func:`binned_spectra_profiles`), with the
+    second surface's PSD C22 rescaled to its own H2: C22 c(H2)/c(H1), C12 sqrt(c(H2)/c(H1)).
+
+    The coherence C12 / sqrt(C11 C22) (seed eq 41) is unchanged by the conversion.
+
+    Returns
+    -------
+    dict
+        A new dict of the bins' arrays (m^4 for the spectra).
+    """
+    ratio = float(isotropic_factor(hurst2) / isotropic_factor(hurst1))
+    return dict(spectra, C22=spectra["C22"] * ratio, C12=spectra["C12"] * math.sqrt(ratio))
+
+
+def merge_spectra(spectra, key="C11"):
+    """Merge binned spectra of several files of one surface (e.g. several magnifications).
+
+    In each bin the files that have modes there are averaged with weights n (their numbers of
+    independent modes: the inverse-variance weights for equal true PSDs). The standard error
+    is C / sqrt(n) (Gaussian random-phase statistics: each mode's power is exponentially
+    distributed, standard deviation = mean).
+
+    Parameters
+    ----------
+    spectra : list of dict
+        Outputs of :func:`binned_spectra_area` / :func:`binned_spectra_profiles` on one bin lattice.
+    key : str
+        Which spectrum to merge.
+
+    Returns
+    -------
+    q, C, n, err : arrays over the bins
+        Mean |q| (1/m), PSD (m^4), independent modes, standard error (m^4); NaN where empty.
+    """
+    n = np.stack([s["n"] for s in spectra])
+    has = n > 0
+    C = np.where(has, np.stack([s[key] for s in spectra]), 0.0)
+    q = np.where(has, np.stack([s["q"] for s in spectra]), 0.0)
+    ntot = n.sum(axis=0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        Cm = np.where(ntot > 0, (n * C).sum(axis=0) / ntot, np.nan)
+        qm = np.where(ntot > 0, (n * q).sum(axis=0) / ntot, np.nan)
+        err = Cm / np.sqrt(ntot)
+    return qm, Cm, ntot, err
+
+
+def coherence(C11, C22, C12, n):
+    """Coherence eta(q) = Re C12 / sqrt(C11 C22) (seed eq 41) and its standard error.
+
+    For n independent complex Gaussian mode pairs with real coherency eta, each mode gives
+    two real sample pairs with correlation eta, so the estimator's standard error is
+    (1 - eta^2) / sqrt(2 n) (Fisher's large-sample variance of a correlation coefficient).
+
+    Parameters
+    ----------
+    C11, C22, C12 : arrays
+        Spectra of the two surfaces and their cross-spectrum (m^4).
+    n : array
+        Independent modes.
+
+    Returns
+    -------
+    eta, err : arrays
+        Dimensionless, eta in [-1, 1]; NaN where C11 or C22 is 0 (a flat surface has no coherence).
+    """
+    with np.errstate(invalid="ignore", divide="ignore"):
+        eta = C12 / np.sqrt(C11 * C22)
+        eta = np.clip(eta, -1.0, 1.0)
+        err = (1.0 - eta * eta) / np.sqrt(2.0 * n)
+    return eta, err
+
+
+def pooled_coherence(pairs):
+    """Cross-spectrum and coherence pooled over several file pairs on one bin lattice.
+
+    The spectra C11, C22, C12 of the pairs are averaged per bin with weights n (independent
+    modes), then eta = C12 / sqrt(C11 C22) (seed eq 41, :func:`coherence`).
+
+    Parameters
+    ----------
+    pairs : list of dict
+        Outputs of :func:`binned_spectra_area` / :func:`binned_spectra_profiles` with ``h2``.
+
+    Returns
+    -------
+    C12, eta, err : arrays over the bins
+        Mean cross-spectrum (m^4), coherence and its standard error (dimensionless); NaN
+        where no pair has modes.
+    """
+    n = np.stack([s["n"] for s in pairs])
+    has = n > 0
+    sums = {k: np.where(has, n * np.stack([np.nan_to_num(s[k]) for s in pairs]), 0.0).sum(axis=0)
+            for k in ("C11", "C22", "C12")}
+    ntot = n.sum(axis=0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        C12 = np.where(ntot > 0, sums["C12"] / ntot, np.nan)
+    eta, err = coherence(sums["C11"], sums["C22"], sums["C12"], ntot)
+    return C12, np.where(ntot > 0, eta, np.nan), np.where(ntot > 0, err, np.nan)
+
+
+# ----------------------------------------------------------------------------------------
+# Binned spectra onto a wavenumber grid
+# ----------------------------------------------------------------------------------------
+
+
+def valid_bins(q, values, positive=False):
+    """The bins with finite q and value (and value > 0 if ``positive``), sorted by q.
+
+    Returns
+    -------
+    q, values : arrays
+        Wavenumbers (1/m) increasing, and the values in their units.
+    """
+    ok = np.isfinite(q) & np.isfinite(values)
+    if positive:
+        ok &= values > 0
+    q, values = q[ok], values[ok]
+    order = np.argsort(q)
+    return q[order], values[order]
+
+
+def _power_law_tail(q_grid, q, C, base, other):
+    """C continued beyond node ``base`` as the power law through nodes ``base`` and ``other``."""
+    slope = np.log(C[other] / C[base]) / np.log(q[other] / q[base])
+    return C[base] * (q_grid / q[base]) ** slope
+
+
+def binned_psd_on_grid(q_grid, q, C, how):
+    """A binned PSD (valid bins, q increasing) on the wavenumber grid ``q_grid`` (m^4).
+
+    Log-log linear interpolation between the bins' (mean |q|, mean C); beyond them ``how``:
+    ``"zero"`` (or ``"none"``, the caller having checked the range) gives 0, ``"power_law"``
+    continues the power law through the first (last) bin and the fourth from that end (or
+    the other end of a shorter table).
+
+    Parameters
+    ----------
+    q_grid : array
+        Target wavenumbers (1/m), increasing.
+    q, C : arrays (m,), m >= 2
+        Bin wavenumbers (1/m) and PSD (m^4, > 0), see :func:`valid_bins`.
+    how : str
+        ``"none"``, ``"zero"`` or ``"power_law"``.
+    """
+    out = extend_psd(q_grid, q, C, "zero")
+    if how == "power_law":
+        k = min(3, q.size - 1)
+        for sel, base, other in ((q_grid < q[0], 0, k), (q_grid > q[-1], -1 - k, -1)):
+            if np.any(sel):
+                out[sel] = _power_law_tail(q_grid[sel], q, C, base, other)
+    return out
+
+
+def coherence_on_grid(q_grid, q, eta):
+    """Binned coherence on the grid ``q_grid``: linear in log q, held constant at its end
+    values beyond the bins (dimensionless).
+
+    Parameters
+    ----------
+    q_grid : array
+        Target wavenumbers (1/m).
+    q, eta : arrays
+        Bin wavenumbers (1/m) and coherence, see :func:`valid_bins`.
+    """
+    return np.interp(np.log(q_grid), np.log(q), eta)
+
+
+# ----------------------------------------------------------------------------------------
+# Periodic square maps
+# ----------------------------------------------------------------------------------------
+
+
+def pair_coherence(h1, h2, pixel_size, q_edges):
+    """Coherence eta(q) = Re C12 / sqrt(C11 C22) of two square maps on one periodic grid,
+    averaged over annuli q_edges[i] <= |q| < q_edges[i+1] (seed eq 41).
+
+    Parameters
+    ----------
+    h1, h2 : arrays (n, n)
+        Heights (m).
+    pixel_size : float
+        dx (m).
+    q_edges : array
+        Annulus edges (1/m).
+
+    Returns
+    -------
+    array (len(q_edges) - 1,)
+        Dimensionless; NaN in annuli without modes or where one map has no roughness.
+    """
+    n0, n1 = np.shape(h1)
+    if n0 != n1 or np.shape(h2) != np.shape(h1):
+        raise ValueError("pair_coherence needs two square maps of the same shape")
+    H1, H2 = np.fft.rfft2(h1), np.fft.rfft2(h2)
+    q = lattice_wavenumbers(n0, pixel_size)
+    weight = half_plane_weights(n0)
+    which = np.digitize(q, q_edges) - 1
+    nb = len(q_edges) - 1
+    ok = (which >= 0) & (which < nb)
+
+    def binned(v):
+        return np.bincount(which[ok], weights=(weight * v)[ok], minlength=nb)[:nb]
+
+    c12 = binned(np.real(H1 * np.conj(H2)))
+    c11, c22 = binned(np.abs(H1) ** 2), binned(np.abs(H2) ** 2)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return c12 / np.sqrt(c11 * c22)
+
+
+def rms_slope_of_map(h, pixel_size):
+    """Root-mean-square slope of a periodic square map (dimensionless), spectrally.
+
+    .. math:: \\xi^2 = \\sum_k |k|^2 |H_k|^2
+
+    the lattice form of the continuum's 2 pi \\int q^3 C dq (seed eq 12).
+
+    Parameters
+    ----------
+    h : array (n, n)
+        Heights (m) of the periodic cell.
+    pixel_size : float
+        Grid spacing dx (m); the cell's side is n dx.
+    """
+    n = np.shape(h)[0]
+    H = np.fft.rfft2(h) / (n * n)
+    q = lattice_wavenumbers(n, pixel_size)
+    return float(np.sqrt(np.sum(half_plane_weights(n) * q * q * np.abs(H) ** 2)))
