@@ -19,7 +19,7 @@ conj E(omega)), |E|^2 instead of the seed's "Im|E|^2" and the upper limit q inst
 (seed misprints in eqs 32/62). S = 1 is the 2001 theory (the seed); S = gamma + (1 - gamma) P^2
 is the later correction (Persson's papers from 2004 on, gamma ~ 1/2).
 
-See docs/theory.md section 6; Persson, J. Chem. Phys. 115, 3840 (2001).
+See docs/theory.md, section "Friction"; Persson, J. Chem. Phys. 115, 3840 (2001).
 """
 
 from __future__ import annotations
@@ -64,7 +64,7 @@ def angular_integrals(q, v, omega_grid, storage, loss, n_phi):
 
     References
     ----------
-    docs/theory.md section 6; seed eqs 29, 32, 61, 62.
+    docs/theory.md, section "Friction"; seed eqs 29, 32, 61, 62.
     """
     q = np.asarray(q, dtype=float)
     v = np.asarray(v, dtype=float)
@@ -111,7 +111,7 @@ def sliding_G(q, C, A, sigma0, nu):
 
     References
     ----------
-    docs/theory.md section 6; seed eqs 32, 62 (corrected).
+    docs/theory.md, section "Friction"; seed eqs 32, 62 (corrected).
     """
     k = _k(sigma0, nu)
     return 0.5 * k[..., None] ** 2 * cumulative_integral(q, np.asarray(q) ** 3 * C * A)
@@ -128,7 +128,7 @@ def contact_fraction(G):
 
     References
     ----------
-    docs/theory.md section 6; seed eq 31.
+    docs/theory.md, section "Friction"; seed eq 31.
     """
     G = np.asarray(G, dtype=float)
     with np.errstate(divide="ignore"):
@@ -151,7 +151,7 @@ def area_factor(P, correction: str, gamma: float):
 
     References
     ----------
-    docs/theory.md section 6; seed eq 29 (S = 1, Persson 2001); the correction S is Persson's
+    docs/theory.md, section "Friction"; seed eq 29 (S = 1, Persson 2001); the correction S is Persson's
     from 2004 on.
     """
     if correction == "none":
@@ -179,7 +179,7 @@ def friction_integrand(q, C, P, S, B, sigma0, nu):
 
     References
     ----------
-    docs/theory.md section 6; seed eqs 29, 61.
+    docs/theory.md, section "Friction"; seed eqs 29, 61.
     """
     k = _k(sigma0, nu)
     return 2.0 * k[..., None] * np.asarray(q) ** 3 * C * P * S * B
@@ -225,7 +225,7 @@ def friction_kernel(q, C, A, B, sigma0, nu, correction="none", gamma=0.5, extras
 
     References
     ----------
-    docs/theory.md section 6; seed eqs 29-32, 61-62 (corrected); Persson, J. Chem. Phys. 115,
+    docs/theory.md, section "Friction"; seed eqs 29-32, 61-62 (corrected); Persson, J. Chem. Phys. 115,
     3840 (2001).
     """
     k = _k(sigma0, nu)

@@ -2,7 +2,7 @@
 small-pressure law p = beta E* exp(-u/u0).
 
 For two rough surfaces the combined PSD (:func:`roughcontact.physics.spectra.psd_combined`,
-seed eq 52) replaces C(q) (seed eqs 54-60). See docs/theory.md section 3 ("Separation");
+seed eq 52) replaces C(q) (seed eqs 54-60). See docs/theory.md, section "Separation";
 Persson, J. Chem. Phys. 115, 3840 (2001); Yang & Persson, J. Phys.: Condens. Matter 20,
 215214 (2008).
 
@@ -63,7 +63,7 @@ def inverse_w(q, C):
 
     References
     ----------
-    docs/theory.md section 3; Persson, J. Chem. Phys. 115, 3840 (2001).
+    docs/theory.md, section "Separation"; Persson, J. Chem. Phys. 115, 3840 (2001).
     """
     q = np.asarray(q, dtype=float)
     return np.sqrt(np.pi * cumulative_integral(q, q**3 * np.asarray(C, dtype=float)))
@@ -93,7 +93,7 @@ def e1_integral(s, a):
 
     References
     ----------
-    docs/theory.md section 3 (seed eq 57).
+    docs/theory.md, section "Separation" (seed eq 57).
     """
     s, a = np.broadcast_arrays(np.asarray(s, dtype=float), np.asarray(a, dtype=float))
     with np.errstate(divide="ignore", invalid="ignore", over="ignore", under="ignore"):
@@ -145,7 +145,7 @@ def yang_persson_J(x0):
 
     References
     ----------
-    docs/theory.md section 3; Yang & Persson, J. Phys.: Condens. Matter 20, 215214 (2008).
+    docs/theory.md, section "Separation"; Yang & Persson, J. Phys.: Condens. Matter 20, 215214 (2008).
     """
     x0 = np.asarray(x0, dtype=float)
     xt, Jt = _yang_persson_table()
@@ -223,7 +223,7 @@ def separation_nodes(q, C, q_upper, panels_per_decade=4, order=4, depth=10.0):
 
     References
     ----------
-    docs/theory.md section 3 (seed eqs 24, 54, 57).
+    docs/theory.md, section "Separation" (seed eqs 24, 54, 57).
     """
     q = np.asarray(q, dtype=float)
     C = np.asarray(C, dtype=float)
@@ -279,7 +279,7 @@ def separation_moments(s, weight, count, s_tail, q_tail):
 
     References
     ----------
-    docs/theory.md section 3 (seed eqs 59-60).
+    docs/theory.md, section "Separation" (seed eqs 59-60).
     """
     with np.errstate(divide="ignore", invalid="ignore"):
         logs = np.where(s > 0, np.log(np.where(s > 0, s, 1.0)), 0.0)
@@ -321,7 +321,7 @@ def small_pressure_law(M0, M1, alpha, refinement="none"):
 
     References
     ----------
-    docs/theory.md section 3; Persson, J. Chem. Phys. 115, 3840 (2001).
+    docs/theory.md, section "Separation"; Persson, J. Chem. Phys. 115, 3840 (2001).
     """
     u0 = 2.0 * alpha / np.sqrt(np.pi) * M0
     shift = 3.0 * (1.0 - alpha) * float(yang_persson_J(0.0)) / alpha if refinement == "yang_persson" else 0.0
@@ -361,7 +361,7 @@ def mean_separation(p, s, weight, count, s_tail, q_tail, *, E_star, alpha, refin
 
     References
     ----------
-    docs/theory.md section 3; Persson, J. Chem. Phys. 115, 3840 (2001); Yang & Persson,
+    docs/theory.md, section "Separation"; Persson, J. Chem. Phys. 115, 3840 (2001); Yang & Persson,
     J. Phys.: Condens. Matter 20, 215214 (2008).
     """
     a = np.asarray(p, dtype=float)[..., None] / E_star

@@ -14,7 +14,7 @@ from .quadrature import integral, loglog_interp
 
 
 def self_affine_hrms_factor(H, qL, q0, q1):
-    """hrms^2 / C0 for the self-affine PSD with roll-off (docs/theory.md section 1).
+    """hrms^2 / C0 for the self-affine PSD with roll-off (docs/theory.md, section "Spectra").
 
     hrms^2 = pi C0 [ q0^2 - qL^2 + (q0^2 / H) (1 - (q0/q1)^(2H)) ]
 
@@ -59,7 +59,7 @@ def self_affine_psd(q, H, qL, q0, q1, C0):
 
     References
     ----------
-    docs/theory.md section 1; seed eq 63.
+    docs/theory.md, section "Spectra"; seed eq 63.
     """
     q = np.asarray(q, dtype=float)
     shape = np.where(q < q0, 1.0, (np.maximum(q, q0) / q0) ** (-2.0 * (1.0 + H)))
@@ -82,7 +82,7 @@ def psd_combined(C1, C2, eta):
 
     References
     ----------
-    docs/theory.md section 1 (eqs 52, 65).
+    docs/theory.md, section "Spectra" (eqs 52, 65).
     """
     C1 = np.asarray(C1, dtype=float)
     C2 = np.asarray(C2, dtype=float)
@@ -103,7 +103,7 @@ def rms_slope_from_psd(q, C):
     return np.sqrt(2.0 * np.pi * integral(q, np.asarray(q) ** 3 * C))
 
 
-#: Conventions of measured PSDs and their conversion to Persson's C(q) (docs/theory.md section 1).
+#: Conventions of measured PSDs and their conversion to Persson's C(q) (docs/theory.md, section "Spectra").
 CONVENTIONS = {
     "persson": ("m^4", "C(q) as given (Persson's convention)"),
     "contact.engineering": ("m^4", "C(q) = C_ST(q) / (2 pi)^2 (contact.engineering / SurfaceTopography convention)"),

@@ -9,7 +9,7 @@ temperature, and is shifted to other temperatures by the time-temperature superp
 
 with the horizontal factor a_T from the WLF equation or a table and the vertical factor b_T.
 Every function takes and returns SI values (rad/s, Pa, s, K). The seed uses E(omega) in its
-Fig. 7 and eqs 29-32, 61-62. See docs/theory.md section 5; Tschoegl, The Phenomenological
+Fig. 7 and eqs 29-32, 61-62. See docs/theory.md, section "Viscoelasticity"; Tschoegl, The Phenomenological
 Theory of Linear Viscoelastic Behavior (1989); Williams, Landel & Ferry, J. Am. Chem. Soc. 77,
 3701 (1955).
 """
@@ -63,7 +63,7 @@ def box_spectrum_modulus(omega, E0, E_inf, tau1, tau2):
 
     References
     ----------
-    docs/theory.md section 5 (the modulus of the seed's Fig. 7); Tschoegl, The Phenomenological
+    docs/theory.md, section "Viscoelasticity" (the modulus of the seed's Fig. 7); Tschoegl, The Phenomenological
     Theory of Linear Viscoelastic Behavior (1989), ch. 3 (box distribution).
     """
     omega = np.asarray(omega, dtype=float)
@@ -98,7 +98,7 @@ def prony_modulus(omega, E0, moduli, times):
 
     References
     ----------
-    docs/theory.md section 5; Tschoegl (1989), ch. 3.
+    docs/theory.md, section "Viscoelasticity"; Tschoegl (1989), ch. 3.
     """
     omega = np.asarray(omega, dtype=float)[..., None]
     moduli = np.asarray(moduli, dtype=float)
@@ -128,7 +128,7 @@ def elastic_modulus(omega, E):
 
     References
     ----------
-    docs/theory.md section 5 (with it the friction of eq 61 vanishes).
+    docs/theory.md, section "Viscoelasticity" (with it the friction of eq 61 vanishes).
     """
     return np.full(np.shape(omega), E), np.zeros(np.shape(omega))
 
@@ -157,7 +157,7 @@ def wlf_log10_shift(T, T_ref, C1, C2):
 
     References
     ----------
-    docs/theory.md section 5; Williams, Landel & Ferry, J. Am. Chem. Soc. 77, 3701 (1955).
+    docs/theory.md, section "Viscoelasticity"; Williams, Landel & Ferry, J. Am. Chem. Soc. 77, 3701 (1955).
     """
     dT = np.asarray(T, dtype=float) - T_ref
     return -C1 * dT / (C2 + dT)
@@ -189,7 +189,7 @@ def shift_factors(T, T_ref, horizontal="none", vertical="none", C1=17.44, C2=51.
 
     References
     ----------
-    docs/theory.md section 5; Ferry, Viscoelastic Properties of Polymers, 3rd ed. (1980), ch. 11.
+    docs/theory.md, section "Viscoelasticity"; Ferry, Viscoelastic Properties of Polymers, 3rd ed. (1980), ch. 11.
     """
     if horizontal == "wlf":
         log_aT = wlf_log10_shift(T, T_ref, C1, C2)
@@ -248,7 +248,7 @@ def frequency_grid(aT, points_per_decade, times=None, data_omega=None, omega_min
 
     References
     ----------
-    docs/theory.md section 5 (cubic log-log interpolation between the nodes: :func:`modulus_at`).
+    docs/theory.md, section "Viscoelasticity" (cubic log-log interpolation between the nodes: :func:`modulus_at`).
     """
     lo, hi = 1e-6, 1e12
     if times is not None:
@@ -289,7 +289,7 @@ def extrapolate_modulus(omega, omega_lo, omega_hi, storage_lo, loss_lo, storage_
 
     References
     ----------
-    docs/theory.md section 5; Tschoegl (1989), ch. 3 (terminal behaviour).
+    docs/theory.md, section "Viscoelasticity"; Tschoegl (1989), ch. 3 (terminal behaviour).
     """
     omega = np.asarray(omega, dtype=float)
     below = omega < omega_lo
@@ -346,7 +346,7 @@ def modulus_at(omega, omega_grid, storage, loss):
 
     References
     ----------
-    docs/theory.md section 5.
+    docs/theory.md, section "Viscoelasticity".
     """
     grid = np.asarray(omega_grid, dtype=float)
     storage = np.asarray(storage, dtype=float)
@@ -395,7 +395,7 @@ def master_curve_at(omega, data_omega, data_storage, data_loss):
 
     References
     ----------
-    docs/theory.md section 5.
+    docs/theory.md, section "Viscoelasticity".
     """
     omega = np.asarray(omega, dtype=float)
     Ep, Epp, inside = extrapolate_modulus(omega, data_omega[0], data_omega[-1], data_storage[0], data_loss[0],

@@ -62,7 +62,7 @@ register_section(
             Param("vanishing_hrms", "bool", default=False,
                   doc="find the substrate hrms at which adhesion vanishes (needs a substrate.hrms sweep reaching it)"),
         ),
-        doc="the adhesion stage (equations.md section 4)",
+        doc="the adhesion stage (docs/theory.md, section 'Adhesion')",
         check=_check_adhesion,
     )
 )

@@ -1,7 +1,7 @@
 """Stage ``friction``: hysteretic rubber friction mu(v) and the relative contact area A/A0(v)
 while sliding, for an elastic (viscoelastic) solid and a hard substrate that may both be rough.
 
-Kernels: :mod:`roughcontact.physics.friction` (docs/theory.md section 6; seed eqs 29-32 for
+Kernels: :mod:`roughcontact.physics.friction` (docs/theory.md, section "Friction"; seed eqs 29-32 for
 one rough surface, 61-62 for two, with the combined PSD C(q, eta) of eq 52, and the seed's
 misprints in eqs 30 and 32/62 corrected). Figures: :mod:`roughcontact.stages.figures.friction`
 (seed Figs 6, 8-11).
@@ -69,7 +69,7 @@ def _attrs(grid, needed_hi: float, n_phi: int, n_seg: int, S_text: str, nu: floa
         "modulus_omega_range": f"{grid[0]:.6g} {grid[-1]:.6g} rad/s",
         "modulus_extrapolated": ("yes: frequencies above the modulus grid use E' constant, E'' ~ 1/omega"
                                  if needed_hi > grid[-1] else "no (above); below the grid E'' ~ omega"),
-        "equations": "docs/theory.md section 6 (seed eqs 29-32, 61-62 with the eq 30 and eq 32/62 misprints corrected)",
+        "equations": "docs/theory.md, section 'Friction' (seed eqs 29-32, 61-62 with the eq 30 and eq 32/62 misprints corrected)",
     }
 
 

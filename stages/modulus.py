@@ -5,7 +5,7 @@ or a real constant for the elastic limit) or from a measured master curve at a r
 temperature (read in SI by the engine's ``master_curve`` reader), and is shifted to the
 temperature(s) of the scene by the WLF equation or a table of shift factors,
 E(omega, T) = b_T E(omega a_T, T_ref). Kernels: :mod:`roughcontact.physics.viscoelastic`
-(docs/theory.md section 5; the seed's Fig. 7 and eqs 29-32 use it). Figure:
+(docs/theory.md, section "Viscoelasticity"; the seed's Fig. 7 and eqs 29-32 use it). Figure:
 :mod:`roughcontact.stages.figures.modulus`.
 
 Storage: E is complex, NetCDF is not (portably). The stage stores the real and imaginary
@@ -192,7 +192,7 @@ def _model(spec, curve):
     kind = spec["kind"]
     if kind == "box":
         attrs = {"model_formula": "box spectrum: E = E0 + (E_inf - E0)/ln(tau2/tau1) [ln(1 + i w tau2) - "
-                                  "ln(1 + i w tau1)], docs/theory.md section 5",
+                                  "ln(1 + i w tau1)], docs/theory.md, section 'Viscoelasticity'",
                  "model_parameters": json.dumps({k: spec[k] for k in ("E0", "E_inf", "tau1", "tau2")})}
         return lambda w: box_spectrum_modulus(w, spec["E0"], spec["E_inf"], spec["tau1"], spec["tau2"]), attrs
     if kind == "prony":

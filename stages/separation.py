@@ -136,7 +136,7 @@ def _beta_attrs(refinement: str) -> dict:
                    + (" times exp(3 (1 - alpha) J(0) / alpha), J(0) = %.10f (Yang-Persson)" % float(yang_persson_J(0.0))
                       if refinement == "yang_persson" else ""),
         "epsilon": EPSILON,
-        "sign_note": "eq 60 of the seed lost the minus sign in the exponent; restored here (equations.md section 3)",
+        "sign_note": "eq 60 of the seed lost the minus sign in the exponent; restored here (docs/theory.md, section 'Separation')",
         "nan_reason": "beta is NaN where the combined PSD is identically zero up to zeta qL (e.g. eta = 1 with "
                       "identical surfaces): then u = 0 and u0 = 0 at every pressure and p = beta E* exp(-u/u0) "
                       "has no meaning",

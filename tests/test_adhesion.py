@@ -1,4 +1,4 @@
-"""Tests of the adhesion stage (equations.md section 4; seed eqs 5-14, 42, 50; Figs 1-2)."""
+"""Tests of the adhesion stage (docs/theory.md, section "Adhesion"; seed eqs 5-14, 42, 50; Figs 1-2)."""
 
 from __future__ import annotations
 

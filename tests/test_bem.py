@@ -302,7 +302,7 @@ def run_bem(run_scene, **over):
 def test_stage_physics_and_comparison(run_scene):
     """Through the engine at 64^2: A/A0 rises and the mean gap falls with p; eta = -1 (rougher
     composite) has less area than eta = 0; identical surfaces (eta = 1) are in full contact;
-    the theory underestimates the area at small p (known bias, equations.md section 2);
+    the theory underestimates the area at small p (known bias, docs/theory.md, section "Contact");
     the ratios are theory / BEM; the histogram integrates to A/A0 and balances the load."""
     pytest.importorskip("tamaas")
     ds = run_bem(run_scene)

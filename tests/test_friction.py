@@ -129,7 +129,7 @@ def test_builtin_orderings_at_every_velocity(builtin):
 
 
 def test_builtin_has_one_broad_maximum(builtin):
-    """equations.md section 6: mu rises ~ v, has one maximum, then decreases."""
+    """docs/theory.md, section "Friction": mu rises ~ v, has one maximum, then decreases."""
     mu = builtin["base"]["friction"]["friction_coefficient"].sel(eta=0.0).values
     i = int(np.argmax(mu))
     assert 0 < i < mu.size - 1

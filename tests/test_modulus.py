@@ -73,7 +73,7 @@ def test_prony_conjugate_symmetry_positive_loss_and_monotone_storage(w, E0, term
 
 
 def test_box_matches_complex_log_formula_and_limits():
-    """equations.md section 5 written with complex logarithms, at moderate omega tau."""
+    """docs/theory.md, section "Viscoelasticity" written with complex logarithms, at moderate omega tau."""
     E0, Ei, t1, t2 = 2e6, 1e9, 1e-5, 1e2
     w = np.geomspace(1e-3, 1e6, 41)
     E = E0 + (Ei - E0) / np.log(t2 / t1) * (np.log(1 + 1j * w * t2) - np.log(1 + 1j * w * t1))

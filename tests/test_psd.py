@@ -55,7 +55,7 @@ def test_combined_psd_is_non_negative_and_equals_eq52(c1, c2, eta):
 
 
 def test_minimum_of_combined_psd_is_at_eta_squared_c2():
-    # equations.md: the seed's eq 66 (C1 = eta C2) is a misprint; the minimum is at C1 = eta^2 C2.
+    # docs/theory.md: the seed's eq 66 (C1 = eta C2) is a misprint; the minimum is at C1 = eta^2 C2.
     c2, eta = 1.0, 0.6
     c1 = np.linspace(0, 1, 100001)
     assert c1[np.argmin(psd_combined(c1, c2, eta))] == pytest.approx(eta**2 * c2, abs=1e-4)
