@@ -235,13 +235,15 @@ def reference() -> str:
         "computed alongside (e.g. `[variants.substrate_only] solid = { kind = \"smooth\" }`).",
         "",
     ]
-    ordered = sorted(sections().items(), key=lambda item: item[0] in ("outputs", "numerics"))
+    # sections and the keys of [numerics] (which several stage modules fill) in a fixed order, whatever
+    # order the modules happened to be imported in
+    ordered = sorted(sections().items(), key=lambda item: (item[0] in ("outputs", "run", "numerics"), item[0]))
     for name, section in ordered:
         lines.append(f"## [{name}]" + (" (optional)" if section.optional else ""))
         if section.doc:
             lines.append(f"{section.doc}.\n")
         lines.append("| key | kind | units | default | meaning |\n|---|---|---|---|---|")
-        groups = [("", section.params)]
+        groups = [("", sorted(section.params, key=lambda p: p.name) if name == "numerics" else section.params)]
         if section.discriminator:
             groups += [(f"{section.discriminator} = \"{k}\": ", ps) for k, ps in section.variants.items()]
         for prefix, params in groups:
