@@ -9,10 +9,11 @@ import argparse
 import json
 import sys
 import traceback
+import warnings
 from pathlib import Path
 
 from . import __version__, engine, scene as scenes, store
-from .errors import ComputationError, UserError
+from .errors import ComputationError, SceneWarning, UserError
 from .stage import stages
 
 
@@ -47,8 +48,22 @@ def _parser() -> argparse.ArgumentParser:
     return ap
 
 
+def _show_warning(message, category, filename, lineno, file=None, line=None):
+    """A SceneWarning as one line naming the keys; other warnings as Python prints them."""
+    if issubclass(category, SceneWarning):
+        print(f"roughcontact: warning: {message}", file=sys.stderr, flush=True)
+    else:
+        sys.stderr.write(warnings.formatwarning(message, category, filename, lineno, line))
+
+
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
+    with warnings.catch_warnings():
+        warnings.showwarning = _show_warning
+        return _main(args)
+
+
+def _main(args) -> int:
     try:
         return _dispatch(args)
     except UserError as exc:
@@ -70,8 +85,9 @@ def main(argv: list[str] | None = None) -> int:
 
 def _dispatch(args) -> int:
     if args.command == "scenes":
-        for name, path in sorted(scenes.builtin_scenes().items()):
-            print(f"{name:16s} {path}")
+        for name, text in sorted(scenes.builtin_descriptions().items()):
+            print(f"{name:16s} {text}")
+        print(f"(scene files in {scenes.default_scene_path().parent}; copy one to start your own)")
         return 0
     if args.command == "reference":
         print(scenes.reference())
@@ -82,6 +98,8 @@ def _dispatch(args) -> int:
     try:
         return _scene_command(args, sc)
     except UserError as exc:  # errors about a scene key name the scene file too
+        if exc.key == "run.scheduler" and getattr(args, "scheduler", None):  # the option's value, not the scene's
+            raise UserError(exc.message, key="--scheduler") from None
         raise (exc.located(file=str(sc.path)) if exc.key and sc.path else exc) from None
 
 
@@ -89,9 +107,12 @@ def _scene_command(args, sc) -> int:
     outdir = args.outdir or engine.default_outdir(sc)
     if args.command == "plan":
         plans = engine.plan(sc, outdir)
+        notes = engine.validate(plans, every=True)[1]  # what a run would refuse, before it runs
         for p in plans:
             why = f" ({'; '.join(p.reasons)})" if p.reasons else ""
             print(f"{p.label:28s} {p.status}{why}  {p.path}")
+        for note in notes:
+            print(f"note: {note}")
         return 1 if any(p.status != "fresh" for p in plans) else 0
     reporter = engine.Reporter(None if getattr(args, "quiet", False) else sys.stderr)
     if args.command == "run":

@@ -251,13 +251,9 @@ def _run(scene, outdir, targets, force, report, compute_with):
         store.clean_temporaries(folder)
     results: dict[str, dict[str, xr.Dataset]] = {v: {} for v in scenes}
     # read every input file and run every validation before anything computes or is written
-    files: dict[int, dict] = {}
-    for i, p in enumerate(plans):
-        if p.status == "fresh":
-            continue
-        files[i] = {param: _read(p.stage, param, path, p.params) for param, path in p.file_paths.items()}
-        if p.stage.validate is not None:
-            p.stage.validate(StageInput(params=p.params, files=files[i], wanted=p.wanted, stage=p.stage.name))
+    files, notes = validate(plans)
+    for note in notes:
+        report(f"note: {note}")
     n = len(plans)
     for i, p in enumerate(plans, start=1):
         tag = f"[{i}/{n}] {p.label}"
@@ -283,6 +279,34 @@ def _run(scene, outdir, targets, force, report, compute_with):
         results[p.variant][p.stage.name] = _open(p.path)
         report(f"{tag}: done in {time.perf_counter() - t0:.2f} s -> {p.path}")
     return results
+
+
+def validate(plans: list[StagePlan], every: bool = False) -> tuple[dict[int, dict], list[str]]:
+    """Read the input files of every stage about to compute (``every``: of every planned stage)
+    and run their ``validate`` hooks, upstream first, before anything computes. A hook sees its
+    upstream stages as StageInputs (their parameters and files). Returns the files read, by plan
+    index, and the hooks' notes for the user."""
+    files: dict[int, dict] = {}
+    index = {(p.variant, p.stage.name): j for j, p in enumerate(plans)}
+
+    def read(j: int) -> dict:
+        if j not in files:
+            q = plans[j]
+            files[j] = {param: _read(q.stage, param, path, q.params) for param, path in q.file_paths.items()}
+        return files[j]
+
+    notes: list[str] = []
+    for i, p in enumerate(plans):
+        if p.status != "fresh":
+            read(i)  # the stage computes from these
+        if p.stage.validate is None or (p.status == "fresh" and not every):
+            continue
+        ups = {up: StageInput(params=plans[j].params, files=read(j), stage=up)
+               for up in p.record["upstream"] for j in (index[(p.variant, up)],)}
+        said = p.stage.validate(StageInput(params=p.params, files=read(i), wanted=p.wanted, stage=p.stage.name,
+                                           upstream=ups))
+        notes += [f"{p.label}: {text}" for text in (said or ())]
+    return files, notes
 
 
 def stage_chunks(scene: Scene, st: Stage, params, wanted=frozenset(), upstream=None) -> dict[str, int]:

@@ -41,3 +41,9 @@ class ComputationError(Exception):
     """A numerical method failed (no convergence, ...). Exit code 1; the message says where."""
 
     exit_code = 1
+
+
+class SceneWarning(UserWarning):
+    """The scene is valid but asks for something that is probably not what the user meant (a
+    rough surface whose roughness no requested magnification reaches, ...). The message names
+    the keys; the command line prints it as ``roughcontact: warning: ...``."""

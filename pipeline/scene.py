@@ -102,6 +102,17 @@ def builtin_scenes() -> dict[str, Path]:
     return {Path(str(p)).stem: Path(str(p)) for p in folder.iterdir() if str(p).endswith(".toml")}
 
 
+def builtin_descriptions() -> dict[str, str]:
+    """Each built-in scene's one-line ``description`` (its name when it has none)."""
+    out = {}
+    for name, path in builtin_scenes().items():
+        try:
+            out[name] = tomllib.loads(path.read_text(encoding="utf-8")).get("description", "") or name
+        except (OSError, tomllib.TOMLDecodeError) as exc:
+            out[name] = f"(unreadable: {exc})"
+    return out
+
+
 def resolve(scene: str | None) -> Path:
     """A scene argument: a file path, or the name of a built-in scene, or None (default)."""
     if scene is None:

@@ -27,12 +27,12 @@ from typing import Any, Callable, Mapping
 import numpy as np
 import xarray as xr
 
-from .errors import ComputationError, UserError
+from .errors import ComputationError, SceneWarning, UserError
 from .schema import MISSING, REQUIRED, Param, Section
 
 __all__ = [
-    "ComputationError", "FileInput", "Figure", "MISSING", "Param", "REQUIRED", "Section", "Stage", "StageInput",
-    "UserError", "Var", "coords", "register", "register_coords", "register_params", "register_section",
+    "ComputationError", "FileInput", "Figure", "MISSING", "Param", "REQUIRED", "SceneWarning", "Section", "Stage",
+    "StageInput", "UserError", "Var", "coords", "register", "register_coords", "register_params", "register_section",
 ]
 
 
@@ -117,14 +117,17 @@ class Stage:
     #: parameters, the optional outputs asked for and the upstream results (lazy or small);
     #: the engine sizes chunks with it (default 512)
     point_bytes: Callable[[Mapping[str, Any], frozenset, Mapping[str, xr.Dataset]], int] | None = None
-    #: optional ``validate(StageInput) -> None``: checks that can fail on the user's input (a file's
-    #: contents, a missing optional package) without computing; the engine runs it for every stage
-    #: about to compute, before any of them computes, so a bad input writes nothing at all.
-    #: ``inp.upstream`` is empty there.
-    validate: Callable[["StageInput"], None] | None = None
+    #: optional ``validate(StageInput) -> None | list[str]``: checks that can fail on the user's input
+    #: (a file's contents, a missing optional package, a request that cannot mean what it says)
+    #: without computing; the engine runs it for every stage about to compute, before any of them
+    #: computes, so a bad input writes nothing at all (``roughcontact plan`` runs it for every stage).
+    #: There ``inp.upstream[stage]`` is the upstream stage's own StageInput (its parameters and
+    #: files, not its result). It may return notes for the user (e.g. the reference wavenumber of
+    #: zeta), which ``plan`` and ``run`` print, and may warn with :class:`SceneWarning`.
+    validate: Callable[["StageInput"], Any] | None = None
     #: the outputs whose error ``roughcontact accuracy`` measures (default: none: not measured)
     main_outputs: tuple[str, ...] = ()
-    #: the relative error the default preset must reach on ``main_outputs``
+    #: the error (relative to each output's scale, docs/accuracy.md) the default preset must reach on ``main_outputs``
     tolerance: float = 1e-4
     #: sweep dimensions the stage's computation couples (e.g. a derivative along ``p``): the
     #: engine never chunks them, whatever the scene's ``[numerics] chunks`` says

@@ -14,7 +14,7 @@ from roughcontact.physics.contact import contact_area_ratio, persson_G, stress_d
 from roughcontact.stage import Figure, Param, Stage, StageInput, Var, register, register_params
 
 from .figures.contact import figure_contact_area, figure_stress_distribution
-from .shared import E_STAR, MATERIAL_KEYS, e_star, zeta_values
+from .shared import E_STAR, MATERIAL_KEYS, Q_REFERENCE, check_magnifications, check_measured_scope, e_star, zeta_values
 
 register_params(
     "numerics",
@@ -26,6 +26,7 @@ register_params(
 
 def compute_contact(inp: StageInput) -> xr.Dataset:
     psd = inp.upstream["psd"]
+    check_measured_scope(inp, psd)
     q = psd["q"].values
     E_star = e_star(inp)
     zeta = xr.DataArray(zeta_values(inp, q), dims=("zeta",))
@@ -36,7 +37,7 @@ def compute_contact(inp: StageInput) -> xr.Dataset:
     ).assign_coords(zeta=zeta)
     p = inp.sweep("p", inp["load.p"])
     area = xr.apply_ufunc(contact_area_ratio, p, G, dask="parallelized", output_dtypes=[float])
-    ds = xr.Dataset({"G": G, "contact_area_ratio": area, "E_star": xr.DataArray(E_star)})
+    ds = xr.Dataset({"G": G, "contact_area_ratio": area, "E_star": xr.DataArray(E_star), "qL": xr.DataArray(q[0])})
     if "stress_distribution" in inp.wanted:
         level = xr.DataArray(np.linspace(0.0, 1.0, inp["numerics.sigma_points"]), dims=("stress_level",))
         dist, sigma = xr.apply_ufunc(
@@ -61,7 +62,7 @@ def _point_bytes(params, wanted, upstream) -> int:
 register(
     Stage(
         name="contact",
-        version="1",
+        version="2",
         compute=compute_contact,
         requires=("psd",),
         params=(*MATERIAL_KEYS, "load.p", "contact.zeta", "numerics.sigma_points", "numerics.sigma_width"),
@@ -69,6 +70,7 @@ register(
             "G": Var("Pa^2", "Persson's G(zeta) = (pi/4) E*^2 int_qL^(zeta qL) q^3 C dq (eq 17)"),
             "contact_area_ratio": Var("1", "relative contact area A/A0 = erf(p / 2 sqrt G) (eq 19)"),
             "E_star": E_STAR,
+            "qL": Q_REFERENCE,
             "stress_distribution": Var("1/Pa", "stress distribution P(sigma; p, zeta) (eq 16)", optional=True),
         },
         coords={
@@ -82,6 +84,7 @@ register(
         ),
         doc="G(zeta), A/A0(p, zeta, eta) and optionally P(sigma; p, zeta, eta).",
         point_bytes=_point_bytes,
+        validate=check_magnifications,
         main_outputs=("contact_area_ratio",),
         tolerance=1e-4,
     )

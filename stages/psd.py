@@ -24,7 +24,7 @@ from roughcontact.physics.spectra import (
 from roughcontact.stage import FileInput, Stage, StageInput, UserError, Var, register
 
 from .maps import measured_coherence_on_grid, measured_psd_on_grid
-from .shared import SURFACES, is_rough, needs_topography
+from .shared import SURFACES, is_rough, needs_topography, reference_note, surface_bands
 
 
 def _measured(name: str, spec: dict, spectrum, q_grid: np.ndarray) -> tuple[np.ndarray, dict]:
@@ -52,31 +52,21 @@ def _measured(name: str, spec: dict, spectrum, q_grid: np.ndarray) -> tuple[np.n
 
 
 def _q_range(inp: StageInput) -> tuple[float, float, list[float]]:
-    lows, highs, knots = [], [], []
-    for name in SURFACES:
-        spec = inp[name]
-        if not is_rough(spec):
-            continue
-        if spec["kind"] == "self_affine":
-            lows.append(spec["qL"])
-            highs.append(spec["q1"])
-            knots += [spec["qL"], spec["q0"], spec["q1"]]
-        elif spec["kind"] == "topography":  # measured range, from the topography stage
-            ds = inp.upstream["topography"]
-            q = ds[f"q_{name}_measured"].values[np.isfinite(ds[f"psd_{name}_measured"].values)]
-            lows.append(float(np.nanmin(q)))
-            highs.append(float(np.nanmax(q)))
-        else:
-            q = inp.files[f"{name}.path"].q
-            lows.append(float(q[0]))
-            highs.append(float(q[-1]))
-    lo = inp["grid.q_min"] or (min(lows) if lows else None)
-    hi = inp["grid.q_max"] or (max(highs) if highs else None)
+    bands = surface_bands(inp, inp.upstream.get("topography"))
+    knots = [inp[name][k] for name in SURFACES if is_rough(inp[name]) and inp[name]["kind"] == "self_affine"
+             for k in ("qL", "q0", "q1")]
+    lo = inp["grid.q_min"] or (min(b.lo for b in bands.values()) if bands else None)
+    hi = inp["grid.q_max"] or (max(b.hi for b in bands.values()) if bands else None)
     if lo is None or hi is None:
         raise UserError("both surfaces are smooth: give grid.q_min and grid.q_max, or a rough surface", key="grid")
     if not lo < hi:
         raise UserError(f"needs q_min < q_max, got {lo:g} and {hi:g} 1/m", key="grid")
     return lo, hi, knots
+
+
+def validate_psd(inp: StageInput) -> list[str]:
+    """Before anything computes: say which wavenumber zeta is measured against."""
+    return [reference_note(inp)]
 
 
 def compute_psd(inp: StageInput) -> xr.Dataset:
@@ -129,7 +119,8 @@ def compute_psd(inp: StageInput) -> xr.Dataset:
         combined = surfaces["substrate"] + surfaces["solid"]
         how = "only one surface is rough: C = C1 + C2 (eta has no effect)"
     combined = combined.transpose(..., "q")
-    combined.attrs = {"formula": how}
+    coherence = "measured" if isinstance(inp["interface.eta"], str) else "swept" if "eta" in combined.dims else "constant"
+    combined.attrs = {"formula": how, "coherence": coherence if both or coherence == "measured" else "none"}
     hrms = xr.apply_ufunc(hrms_from_psd, q, combined, input_core_dims=[["q"], ["q"]], dask="parallelized", output_dtypes=[float])
     slope = xr.apply_ufunc(rms_slope_from_psd, q, combined, input_core_dims=[["q"], ["q"]], dask="parallelized", output_dtypes=[float])
     ds = xr.Dataset(
@@ -157,6 +148,7 @@ register(
         name="psd",
         version="1",
         compute=compute_psd,
+        validate=validate_psd,
         params=("substrate", "solid", "interface.eta", "grid.q_min", "grid.q_max", "numerics.points_per_decade"),
         files=(_files("substrate"), _files("solid")),
         requires=("topography",),

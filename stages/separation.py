@@ -35,7 +35,7 @@ from roughcontact.stage import (
 )
 
 from .figures.separation import figure_separation
-from .shared import E_STAR, MATERIAL_KEYS, e_star, zeta_values
+from .shared import E_STAR, MATERIAL_KEYS, Q_REFERENCE, check_magnifications, check_measured_scope, e_star, zeta_values
 
 register_section(
     Section(
@@ -77,6 +77,7 @@ def _checked_alpha(inp: StageInput) -> float:
 
 def compute_separation(inp: StageInput) -> xr.Dataset:
     psd = inp.upstream["psd"]
+    check_measured_scope(inp, psd)
     q = psd["q"].values
     E_star = e_star(inp)
     alpha = _checked_alpha(inp)
@@ -125,7 +126,7 @@ def compute_separation(inp: StageInput) -> xr.Dataset:
     beta = beta.assign_coords(zeta=zeta)
     beta.attrs = _beta_attrs(refinement)
     ds = xr.Dataset({"mean_separation": u, "separation_u0": u0, "separation_beta": beta,
-                     "E_star": xr.DataArray(E_star)})
+                     "E_star": xr.DataArray(E_star), "qL": xr.DataArray(q[0])})
     ds.attrs.update({"separation_alpha": alpha, "separation_refinement": refinement, "separation_epsilon": EPSILON})
     return ds
 
@@ -146,7 +147,7 @@ def _beta_attrs(refinement: str) -> dict:
 register(
     Stage(
         name="separation",
-        version="1",
+        version="2",
         compute=compute_separation,
         requires=("psd",),
         params=(*MATERIAL_KEYS, "load.p", "contact.zeta", "separation.alpha", "separation.refinement", *_NUMERICS),
@@ -155,7 +156,9 @@ register(
             "separation_u0": Var("m", "decay length u0 of the small-pressure law p = beta E* exp(-u/u0) (eq 59)"),
             "separation_beta": Var("1", "prefactor beta of the small-pressure law p = beta E* exp(-u/u0) (eq 60)"),
             "E_star": E_STAR,
+            "qL": Q_REFERENCE,
         },
+        validate=check_magnifications,
         figures=(Figure("fig5_separation", "log10(p/E*) against u (seed Fig. 5)", ("separation",), figure_separation),),
         doc="Mean interfacial separation u(p, zeta, eta) (eq 57) and its small-pressure law u0, beta (eqs 59-60).",
         main_outputs=("mean_separation",),

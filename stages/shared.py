@@ -10,11 +10,15 @@ coherence eta), ``[material]`` (the elastic solid), ``[load]`` (the nominal pres
 
 from __future__ import annotations
 
+import warnings
+from typing import NamedTuple
+
 import numpy as np
 
 from roughcontact.physics.contact import effective_modulus
 from roughcontact.physics.spectra import CONVENTIONS
-from roughcontact.stage import Param, Section, UserError, Var, register_coords, register_params, register_section
+from roughcontact.stage import (Param, SceneWarning, Section, UserError, Var, register_coords, register_params,
+                                register_section)
 
 # ----------------------------------------------------------------------------------------
 # Coordinates written by several stages
@@ -37,6 +41,10 @@ E_STAR = Var("Pa", "effective modulus E* = E/(1 - nu^2)")
 
 #: the scene keys E* is derived from
 MATERIAL_KEYS = ("material.E", "material.nu")
+
+#: qL, stored by the stages whose results are over zeta, so that every zeta has its reference
+Q_REFERENCE = Var("1/m", "reference wavenumber qL of the magnification zeta = q/qL: the lowest wavenumber of the "
+                  "q grid (grid.q_min, else the lowest of the surfaces), the system size L = 2 pi/qL")
 
 
 def e_star(inp) -> float:
@@ -62,6 +70,115 @@ def zeta_values(inp, q: np.ndarray) -> np.ndarray:
 # ----------------------------------------------------------------------------------------
 
 SURFACES = ("substrate", "solid")
+
+
+class Band(NamedTuple):
+    """The wavenumbers (1/m) a rough surface has roughness at, and the scene key that sets them."""
+
+    lo: float
+    hi: float
+    key: str
+    #: a measured PSD extended as a power law: rough at every wavenumber of the grid
+    spans_grid: bool = False
+
+
+def surface_bands(psd, topography=None) -> dict[str, Band]:
+    """The :class:`Band` of each rough surface (the measured range for a measured PSD).
+
+    ``psd`` is the psd stage's StageInput (its surface sections and files, SI). A measured map's
+    band is known only once the topography stage has run: pass its result as ``topography``;
+    without it such surfaces are left out."""
+    bands = {}
+    for name in SURFACES:
+        spec = psd[name]
+        if not is_rough(spec):
+            continue
+        if spec["kind"] == "self_affine":
+            bands[name] = Band(spec["qL"], spec["q1"], f"{name}.qL")
+        elif spec["kind"] == "psd_file":
+            q = psd.files[f"{name}.path"].q
+            bands[name] = Band(float(q[0]), float(q[-1]), f"{name}.path", spec["extend"] == "power_law")
+        elif topography is not None:
+            measured = np.isfinite(topography[f"psd_{name}_measured"].values)
+            q = topography[f"q_{name}_measured"].values[measured]
+            bands[name] = Band(float(np.min(q)), float(np.max(q)), f"{name}.files")
+    return bands
+
+
+def reference_wavenumber(psd, bands) -> tuple[float | None, str]:
+    """qL, the reference of zeta = q/qL and lowest wavenumber of the q grid, and where it comes
+    from: ``grid.q_min``, else the lowest band edge of the rough surfaces (None if unknown yet)."""
+    if psd["grid.q_min"]:
+        return float(psd["grid.q_min"]), "grid.q_min"
+    if not bands or len(bands) < sum(is_rough(psd[n]) for n in SURFACES):
+        return None, "the lowest wavenumber of the surfaces"
+    name = min(bands, key=lambda n: bands[n].lo)
+    return bands[name].lo, f"the lowest wavenumber of the {name}, {bands[name].key}"
+
+
+def _wavenumber(q: float) -> str:
+    """A wavenumber for a message, e.g. 2e8 1/m as '2e8'."""
+    return f"{q:.4g}".replace("e+0", "e").replace("e+", "e").replace("e-0", "e-")
+
+
+def reference_note(psd) -> str:
+    """What zeta is measured against, for ``plan`` and ``run`` (``psd``: the psd stage's StageInput)."""
+    qL, source = reference_wavenumber(psd, surface_bands(psd))
+    if qL is None:
+        return "zeta = q/qL with qL = the lowest wavenumber measured on the maps (known after the topography stage)"
+    return f"zeta = q/qL with qL = {_wavenumber(qL)} 1/m ({source}; grid.q_min sets another system size)"
+
+
+def check_magnifications(inp) -> None:
+    """``validate`` hook of the stages that read ``contact.zeta``: a rough surface whose whole band
+    lies outside the magnifications asked for is an error when nothing rough is left or when a
+    coherence is swept or measured (it could change nothing), a SceneWarning otherwise."""
+    psd = inp.upstream["psd"]
+    bands = surface_bands(psd)
+    qL, source = reference_wavenumber(psd, bands)
+    if qL is not None:
+        eta = psd["interface.eta"]
+        scope_check(bands, qL, source, inp["contact.zeta"], isinstance(eta, str) or np.size(eta) > 1,
+                    n_rough=sum(is_rough(psd[n]) for n in SURFACES))
+
+
+def check_measured_scope(inp, psd) -> None:
+    """The same check when the stage computes, for measured maps (their band is known only once
+    the topography stage has run); ``psd`` is the psd stage's result."""
+    q, bands, n_rough = psd["q"].values, {}, 0
+    for name in SURFACES:
+        da = psd[f"psd_{name}"]
+        n_rough += da.attrs.get("surface") != "smooth"
+        if da.attrs.get("surface") == "measured topography":
+            rough = np.flatnonzero(np.any(da.values.reshape(-1, q.size) > 0, axis=0))
+            bands[name] = Band(q[rough[0]], q[rough[-1]], f"{name}.files") if rough.size else Band(np.inf, np.inf, f"{name}.files")
+    if bands:
+        scope_check(bands, q[0], "the lowest wavenumber of the maps", inp["contact.zeta"],
+                    psd["psd_combined"].attrs.get("coherence") in ("measured", "swept"), n_rough)
+
+
+def scope_check(bands, qL: float, source: str, zeta, coupled: bool, n_rough: int) -> None:
+    """Raise or warn when the magnifications ``zeta`` (a list, or "all") leave out the whole band
+    of a rough surface (see :func:`check_magnifications`)."""
+    if isinstance(zeta, str):
+        return
+    top = qL * float(np.max(zeta))
+    lost = {n: b for n, b in bands.items() if not b.spans_grid and (b.lo > top * (1 + 1e-9) or b.hi < qL * (1 - 1e-9))}
+    if not lost:
+        return
+    parts = [f"the {n}'s roughness ({b.key}: {_wavenumber(b.lo)} to {_wavenumber(b.hi)} 1/m) is outside that range"
+             for n, b in lost.items()]
+    need = max(b.lo for b in lost.values()) / qL
+    fix = (f"Raise contact.zeta to at least {_wavenumber(need)} (or \"all\") or set grid.q_min, the system's lowest wavenumber "
+           f"2 pi/L" if all(b.hi >= qL for b in lost.values()) else "Lower grid.q_min")
+    where = f"contact.zeta up to {np.max(zeta):g} sees q from qL = {_wavenumber(qL)} to {_wavenumber(top)} 1/m (qL: {source})"
+    if len(lost) == n_rough:
+        raise UserError(f"{where}; {'; '.join(parts)}: no roughness is left. {fix}", key="contact.zeta")
+    if coupled:
+        raise UserError(f"{where}; {'; '.join(parts)}, so interface.eta can change nothing: every result would be that "
+                        f"of the other surface alone. {fix}", key="contact.zeta")
+    warnings.warn(SceneWarning(f"{where}; {'; '.join(parts)}: the results are those of the other "
+                               f"surface alone. {fix}"), stacklevel=2)
 
 
 def is_rough(spec) -> bool:
@@ -200,7 +317,8 @@ register_section(
         "grid",
         (
             Param("q_min", "quantity", "1/m", default=None, lo=0.0, lo_open=True,
-                  doc="lowest wavenumber of the q grid (qL of the system; default: lowest of the surfaces)"),
+                  doc="lowest wavenumber of the q grid: qL = 2 pi/L, the system size and the reference of zeta = q/qL "
+                      "(default: lowest of the surfaces; `plan` prints it)"),
             Param("q_max", "quantity", "1/m", default=None, lo=0.0, lo_open=True,
                   doc="highest wavenumber (default: highest of the surfaces)"),
         ),
