@@ -113,14 +113,27 @@ CONVENTIONS = {
         "1D profile PSD with hrms^2 = (1/pi) int_0^inf C1D dq; exact only for an isotropic self-affine "
         "surface with that Hurst exponent (the earlier statement C1D/(pi q) is 4x too large)",
     ),
+    "1d_persson": (
+        "m^3",
+        "C(q) = 2 pi c(H) C1D_P(q) / q from a 1D profile PSD in Persson's 1D convention, C1D_P = C1D / (2 pi) with "
+        "hrms^2 = 2 int_0^inf C1D_P dq (Persson et al. 2005); c(H) as for '1d'; exact only for an isotropic "
+        "self-affine surface with that Hurst exponent",
+    ),
 }
 
 
 def psd_to_persson(q, values, convention, hurst=0.5):
     """Convert a measured PSD in ``convention`` to Persson's C(q) in m^4 (see CONVENTIONS).
 
-    For a 1D profile PSD, C1D(q) = 2 pi \\int dq_y C(sqrt(q^2 + q_y^2)), which for
-    C ~ q^(-2(1+H)) inverts to C = c(H) C1D / q (:func:`isotropic_factor`).
+    For a 1D profile PSD, C1D(q) = 2 pi \\int dq_y C(sqrt(q^2 + q_y^2)) (hrms^2 = (1/pi)
+    \\int_0^inf C1D dq), which for C ~ q^(-2(1+H)) inverts to C = c(H) C1D / q
+    (:func:`isotropic_factor`). Persson's 1D convention, C1D_P(q) = (1/2 pi) \\int dx <h(x) h(0)>
+    exp(-i q x) with hrms^2 = 2 \\int_0^inf C1D_P dq, is C1D / (2 pi): C = 2 pi c(H) C1D_P / q.
+
+    References
+    ----------
+    Persson, Albohr, Tartaglino, Volokitin & Tosatti, J. Phys.: Condens. Matter 17, R1 (2005);
+    docs/theory.md, section "Spectra".
     """
     if convention == "persson":
         return values
@@ -128,6 +141,8 @@ def psd_to_persson(q, values, convention, hurst=0.5):
         return values / (2.0 * np.pi) ** 2
     if convention == "1d":
         return isotropic_factor(hurst) * values / q
+    if convention == "1d_persson":
+        return 2.0 * np.pi * isotropic_factor(hurst) * values / q
     raise ValueError(convention)
 
 

@@ -14,7 +14,9 @@ from pathlib import Path
 
 from . import __version__, engine, scene as scenes, store
 from .errors import ComputationError, SceneWarning, UserError
+from .scene import units_of
 from .stage import stages
+from .units import display
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -100,7 +102,8 @@ def _dispatch(args) -> int:
     except UserError as exc:  # errors about a scene key name the scene file too
         if exc.key == "run.scheduler" and getattr(args, "scheduler", None):  # the option's value, not the scene's
             raise UserError(exc.message, key="--scheduler") from None
-        raise (exc.located(file=str(sc.path)) if exc.key and sc.path else exc) from None
+        in_scene = exc.key and not exc.key.startswith("--")  # an option's error is not the scene file's
+        raise (exc.located(file=str(sc.path)) if in_scene and sc.path else exc) from None
 
 
 def _scene_command(args, sc) -> int:
@@ -168,17 +171,16 @@ def _show(path: Path) -> int:
         raise UserError(f"not a readable NetCDF file ({exc.__class__.__name__})", file=str(path)) from None
     with ds:
         a = ds.attrs
-        print(f"{path}: stage {a.get('stage_name', '?')} v{a.get('stage_version', '?')}, "
-              f"roughcontact {a.get('software_version', '?')} (git {a.get('git_commit', '?')})")
-        print(f"created {a.get('date_created', '?')} from scene {a.get('scene', '?')} [{a.get('scene_variant', '?')}]")
-        print(f"key {a.get('stage_key', '?')}")
+        _show_header(path, a)
         print("dimensions: " + ", ".join(f"{d}={n}" for d, n in ds.sizes.items()))
         print("coordinates:")
         for name, v in ds.coords.items():
             print(f"  {name:24s} [{v.attrs.get('units', '?')}] {v.attrs.get('long_name', '')}")
         print("variables:")
         for name, v in ds.data_vars.items():
-            print(f"  {name:24s} ({', '.join(v.dims)}) [{v.attrs.get('units', '?')}] {v.attrs.get('long_name', '')}")
+            units = v.attrs.get("units", "?")
+            value = f" = {display(v.values.item(), units)}" if v.ndim == 0 and v.dtype.kind == "f" else ""
+            print(f"  {name:24s} ({', '.join(v.dims)}) [{units}] {v.attrs.get('long_name', '')}{value}")
         for label, attr in (("parameters", "parameters"), ("upstream", "upstream_keys"), ("input files", "input_files")):
             if attr in a:
                 try:
@@ -193,22 +195,34 @@ def _show(path: Path) -> int:
     return 0
 
 
+def _show_header(path: Path, a) -> None:
+    """What the file is: a stage's result (stage, version, key) or another roughcontact table."""
+    made = f"roughcontact {a.get('software_version', '?')} (git {a.get('git_commit', '?')})"
+    if "stage_name" in a:
+        print(f"{path}: stage {a['stage_name']} v{a.get('stage_version', '?')}, {made}")
+        print(f"created {a.get('date_created', '?')} from scene {a.get('scene', '?')} [{a.get('scene_variant', '?')}]")
+        print(f"key {a.get('stage_key', '?')}")
+    else:  # e.g. accuracy.nc: not a stage's result, so no stage key
+        print(f"{path}: {a.get('title', 'a NetCDF file not written by a stage')}, {made}")
+        print(f"created {a.get('date_created', '?')}" + (f" from scene {a['scene']}" if "scene" in a else ""))
+        if "comment" in a:
+            print(a["comment"])
+
+
 def _summarise(value, prefix="") -> list[str]:
-    """Readable lines for a provenance JSON value; long lists are shortened to their ends."""
+    """Readable lines for a provenance JSON value: quantities with units, long lists by their ends."""
     if isinstance(value, dict):
         out = []
         for k, v in value.items():
-            out += _summarise(v, f"{prefix}{k}.") if isinstance(v, dict) else [f"{prefix}{k} = {_brief(v)}"]
+            out += _summarise(v, f"{prefix}{k}.") if isinstance(v, dict) else [f"{prefix}{k} = {_brief(v, prefix + k)}"]
         return out
     if isinstance(value, list) and value and isinstance(value[0], dict):
         return [", ".join(f"{k}={v}" for k, v in item.items()) for item in value]
-    return [f"{prefix.rstrip('.')} = {_brief(value)}" if prefix else _brief(value)]
+    return [f"{prefix.rstrip('.')} = {_brief(value, prefix.rstrip('.'))}" if prefix else _brief(value)]
 
 
-def _brief(v) -> str:
-    if isinstance(v, list) and len(v) > 6:
-        return f"[{v[0]!r}, {v[1]!r}, ..., {v[-1]!r}] ({len(v)} values)"
-    return json.dumps(v)
+def _brief(v, key: str = "") -> str:
+    return display(v, units_of(key) if key else None)
 
 
 if __name__ == "__main__":

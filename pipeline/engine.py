@@ -18,8 +18,9 @@ import xarray as xr
 from . import store
 from .errors import UserError
 from .readers import READERS
-from .schema import MISSING
-from .scene import Scene
+from .units import display
+from .schema import MISSING, did_you_mean
+from .scene import Scene, units_of
 from .stage import Stage, StageInput, coords, producer_of, stages
 
 
@@ -79,9 +80,8 @@ def plan(scene: Scene, outdir: Path, targets: Iterable[str] | None = None, force
     """Plan every needed stage of the scene and of each of its variants."""
     targets = tuple(targets) if targets is not None else scene.outputs
     force = set(force)
-    unknown = force - set(stages()) - {"all"}
-    if unknown:
-        raise UserError(f"--force names unknown stage(s): {', '.join(sorted(unknown))}")
+    for name in sorted(force - set(stages()) - {"all"}):
+        raise UserError(f"no stage {name!r}{did_you_mean(name, sorted(stages()))}", key="--force")
     plans: list[StagePlan] = []
     for variant, sc in (("base", scene), *scene.variants.items()):
         keys: dict[str, str] = {}
@@ -89,6 +89,9 @@ def plan(scene: Scene, outdir: Path, targets: Iterable[str] | None = None, force
             p = _plan_stage(sc, variant, st, outdir, keys, targets, force)
             keys[st.name] = p.key
             plans.append(p)
+    used = list(dict.fromkeys(p.stage.name for p in plans))
+    for name in sorted(force - set(used) - {"all"}):
+        raise UserError(f"the scene does not use stage {name!r} (it runs {', '.join(used)})", key="--force")
     return plans
 
 
@@ -177,12 +180,13 @@ def _param_diff(name, old, new) -> list[str]:
             if old.get(k) != new.get(k):
                 out.extend(_param_diff(f"{name}.{k}", old.get(k), new.get(k)))
         return out
-    return [f"{name}: {_short(old)} -> {_short(new)}"]
+    units = units_of(name)
+    return [f"{name}: {_short(old, units)} -> {_short(new, units)}"]
 
 
-def _short(value) -> str:
-    text = repr(value)
-    return text if len(text) <= 40 else text[:37] + "..."
+def _short(value, units=None) -> str:
+    text = display(value, units) if value is not None else "(not set)"
+    return text if len(text) <= 60 else text[:57] + "..."
 
 
 def _finish(ds: xr.Dataset, p: StagePlan) -> xr.Dataset:

@@ -93,6 +93,18 @@ class Scene:
         return f"{self.path or '<built-in ' + self.name + '>'}"
 
 
+def units_of(dotted: str) -> str | None:
+    """The SI units of the quantity at scene key ``dotted`` (``material.E`` -> ``Pa``), None when
+    the key is not a quantity (or unknown)."""
+    section, _, key = dotted.partition(".")
+    sec = sections().get(section)
+    if sec is None:
+        return None
+    params = list(sec.params) + [p for ps in sec.variants.values() for p in ps]
+    found = [p for p in params if p.name == key.rpartition(".")[2]]
+    return found[0].units if found and found[0].kind in ("quantity", "sweep", "quantities") else None
+
+
 def default_scene_path() -> Path:
     return Path(str(resources.files(__package__) / "scenes" / "default.toml"))
 

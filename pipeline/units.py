@@ -56,9 +56,7 @@ def to_si(value, units: str, *, key: str | None = None, default_unit: str | None
             return _convert(float(value), default_unit, units, key)
         if is_dimensionless(units):
             return float(value)
-        raise UserError(
-            f"{value!r} has no units; write it with units, e.g. \"{value} {_example_unit(units)}\"", key=key
-        )
+        raise UserError(_no_units(value, units), key=key)
     if not isinstance(value, str):
         raise UserError(f"expected a number or a quantity string, got {type(value).__name__}", key=key)
     m = _NUMBER.match(value)
@@ -70,9 +68,7 @@ def to_si(value, units: str, *, key: str | None = None, default_unit: str | None
             return _convert(number, default_unit, units, key)
         if is_dimensionless(units):
             return number
-        raise UserError(
-            f"{value!r} has no units; write it with units, e.g. \"{value} {_example_unit(units)}\"", key=key
-        )
+        raise UserError(_no_units(value, units), key=key)
     return _convert(number, unit_text, units, key)
 
 
@@ -104,3 +100,41 @@ def _example_unit(units: str) -> str:
     return {"m": "nm", "Pa": "MPa", "1/m": "1/m", "m^4": "m^4", "J/m^2": "J/m^2", "K": "K", "m/s": "m/s"}.get(
         units, units or ""
     )
+
+
+def _no_units(value, units: str) -> str:
+    number = float(value) if not isinstance(value, str) else float(_NUMBER.match(value).group(1))
+    return f"{value!r} has no units; write it with its unit, e.g. \"{readable(number, units)}\" if it is in {units}"
+
+
+#: SI units shown with a prefix (77.2 GPa, 1 nm); others in powers of ten (2e8 1/m)
+_PREFIXED = ("m", "Pa", "s", "J/m^2", "N", "W", "Hz")
+
+
+def number(x: float, digits: int = 4) -> str:
+    """A number at readable precision: 4 significant digits, powers of ten as 2e8 / 1.5e-10."""
+    text = f"{x:.{digits}g}"
+    mantissa, e, exponent = text.partition("e")
+    return f"{mantissa}e{int(exponent)}" if e else text
+
+
+def readable(value: float, units: str, digits: int = 4) -> str:
+    """A quantity in SI ``units`` as a short string with units: (77.2e9, "Pa") -> "77.2 GPa",
+    (1e-9, "m") -> "1 nm", (2e8, "1/m") -> "2e8 1/m", (0.42, "") -> "0.42"."""
+    if is_dimensionless(units) or not np.isfinite(value):
+        return f"{number(value, digits)} {units}".rstrip() if units not in ("", "1") else number(value, digits)
+    if units in _PREFIXED and value != 0:
+        q = registry().Quantity(value, units).to_compact()
+        return f"{number(q.magnitude, digits)} {q.units:~}".replace("µ", "u").replace(" ** ", "^").replace(" / ", "/")
+    return f"{number(value, digits)} {units}"
+
+
+def display(value, units: str | None) -> str:
+    """A parameter value for ``plan`` and ``show``: quantities with units at readable precision,
+    long lists by their ends and length, anything else as JSON would show it."""
+    if isinstance(value, (list, tuple)):
+        items = [display(v, units) for v in value]
+        return "[" + ", ".join(items) + "]" if len(items) <= 4 else f"[{items[0]}, {items[1]}, ..., {items[-1]}] ({len(items)} values)"
+    if isinstance(value, (int, float, np.number)) and not isinstance(value, bool) and units is not None:
+        return readable(float(value), units)
+    return repr(value) if isinstance(value, str) else str(value).lower() if isinstance(value, bool) else str(value)

@@ -93,13 +93,24 @@ def _profile_psd(q, H, A):
     return np.array([2 * 2 * np.pi * integrate.quad(f, 0, np.inf, args=(qx,), epsrel=1e-12)[0] for qx in q])
 
 
-@pytest.mark.parametrize("convention, H", [("persson", 0.8), ("contact.engineering", 0.8), ("1d", 0.5), ("1d", 0.8)])
+def _profile_psd_persson(q, H, A):
+    """Persson's 1D convention, C1D_P(q) = int dq_y C(sqrt(q^2 + q_y^2)) over the whole line (so that
+    hrms^2 = int d^2q C = 2 int_0^inf C1D_P dq), for C = A q^(-2(1+H)), by quadrature."""
+    from scipy import integrate
+
+    f = lambda qy, qx: A * (qx * qx + qy * qy) ** (-(1 + H))  # noqa: E731
+    return np.array([2 * integrate.quad(f, 0, np.inf, args=(qx,), epsrel=1e-12)[0] for qx in q])
+
+
+@pytest.mark.parametrize("convention, H", [("persson", 0.8), ("contact.engineering", 0.8), ("1d", 0.5), ("1d", 0.8),
+                                          ("1d_persson", 0.5), ("1d_persson", 0.8)])
 def test_measured_psd_file_conventions_convert_to_persson(run_scene, tmp_path, convention, H):
     q = log_grid(1e8, 1e11, 40)
     A = 1e-36 * 1e8 ** (2 * (1 + H))
     C = A * q ** (-2 * (1 + H))
-    given = {"persson": C, "contact.engineering": C * (2 * np.pi) ** 2, "1d": _profile_psd(q, H, A)}[convention]
-    unit = "m^3" if convention == "1d" else "m^4"
+    given = {"persson": C, "contact.engineering": C * (2 * np.pi) ** 2, "1d": _profile_psd(q, H, A),
+             "1d_persson": _profile_psd_persson(q, H, A)}[convention]
+    unit = "m^3" if convention.startswith("1d") else "m^4"
     path = _write_table(tmp_path / "psd.txt", q, given, header=f"# q [1/m]  C [{unit}]")
     surf = {"kind": "psd_file", "path": str(path), "convention": convention, "hurst": H}
     res = run_scene(make_scene(substrate=surf, solid=None, grid={"q_min": "2e8 1/m", "q_max": "4e10 1/m"},
