@@ -168,7 +168,7 @@ class Topography:
     metadata
         The file's metadata (instrument, date, ...), as JSON-able values.
     unit_source
-        Where ``unit`` comes from: ``"file"`` or ``"scene"``.
+        Where ``unit`` comes from: ``"file"``, ``"header"`` (a text file's column header) or ``"scene"``.
     """
 
     path: Path
@@ -281,17 +281,11 @@ def read_topography(path: Path, *, key: str = "surface", height_unit: str | None
     if heights.size == 0:
         raise UserError("the file holds no height data", file=str(path))
     sizes_out = tuple(float(s) for s in np.atleast_1d(sizes)) if sizes is not None else None
-    source, unit_key = "file", f"unit {unit!r} in the file"
-    if unit is None:
-        if height_unit is None:
-            raise UserError(f"the file does not say the unit of its heights; set {key}.height_unit (e.g. \"nm\")",
-                            file=str(path), key=f"{key}.height_unit")
-        unit, source, unit_key = height_unit, "scene", f"{key}.height_unit"
-    from .units import array_to_si
+    from .header_units import length_units  # the file's unit, else a text header's ("# x [um]  h [nm]"), else the scene's
 
-    factor = float(array_to_si(np.array(1.0), unit, "m", key=unit_key))
+    unit, source, factor, size_factor = length_units(path, unit, height_unit, key)
     heights *= factor
-    sizes_out = tuple(s * factor for s in sizes_out) if sizes_out is not None else None
+    sizes_out = tuple(s * size_factor for s in sizes_out) if sizes_out is not None else None
     return Topography(
         path=path, heights=heights, physical_sizes=sizes_out, periodic=periodic, unit=unit,
         format=type(reader).__name__.removesuffix("Reader"), channel=str(getattr(channel, "name", channel.index)),

@@ -235,7 +235,8 @@ DETREND_DEGREE = {"mean": 0, "plane": 1, "curvature": 2}
 TOPOGRAPHY_PARAMS = (
     Param("files", "paths", doc="height map(s) or line scan(s) of this surface, any format SurfaceTopography reads; "
           "several files (e.g. several magnifications) are merged onto one q grid"),
-    Param("height_unit", "str", default=None, doc="unit of heights (and sizes) for files that do not say (npy, bare text)"),
+    Param("height_unit", "str", default=None, doc="unit of heights (and sizes) for files that do not say (npy; text without a header "
+          "like '# x [um]  h [nm]', whose units are used)"),
     Param("size_x", "quantity", "m", default=None, lo=0.0, lo_open=True, doc="scan length along x, for files that do not say"),
     Param("size_y", "quantity", "m", default=None, lo=0.0, lo_open=True,
           doc="scan length along y, for files that do not say (default: square pixels)"),
