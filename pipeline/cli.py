@@ -133,17 +133,23 @@ def _scene_command(args, sc) -> int:
     raise AssertionError(args.command)
 
 
+def scene_figures(sc) -> tuple[list, list]:
+    """The figures ``plot`` draws for a scene, and those it skips because the scene does not ask
+    for an optional output they need."""
+    needed = {st.name for st in engine.needed_stages(sc, sc.outputs)}
+    figures = [f for st in stages().values() for f in st.figures if set(f.stages) <= needed]
+    return [f for f in figures if set(f.outputs) <= set(sc.outputs)], [f for f in figures if not set(f.outputs) <= set(sc.outputs)]
+
+
 def _plot(sc, outdir: Path, reporter, scheduler=None) -> int:
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    needed = {st.name for st in engine.needed_stages(sc, sc.outputs)}
-    figures = [f for st in stages().values() for f in st.figures if set(f.stages) <= needed]
-    for f in [f for f in figures if not set(f.outputs) <= set(sc.outputs)]:
+    figures, skipped = scene_figures(sc)
+    for f in skipped:
         print(f"{f.title}: skipped (add {', '.join(sorted(set(f.outputs) - set(sc.outputs)))} to outputs.variables)")
-    figures = [f for f in figures if set(f.outputs) <= set(sc.outputs)]
     if not figures:
         raise UserError("none of the scene's stages draws a figure", key="outputs.variables")
     results = engine.run(sc, outdir, report=reporter, scheduler=scheduler)
@@ -152,6 +158,10 @@ def _plot(sc, outdir: Path, reporter, scheduler=None) -> int:
     for f in figures:
         fig = f.make(results)
         target = folder / f"{f.name}.png"
+        if fig is None:  # nothing to draw for this scene (e.g. no paired maps): no blank figure
+            target.unlink(missing_ok=True)
+            print(f"{f.title}: nothing to draw for this scene (no figure written)")
+            continue
         tmp = folder / f"{store.TMP_PREFIX}{f.name}.png"
         fig.savefig(tmp, dpi=130)
         plt.close(fig)

@@ -8,7 +8,8 @@ hashing, caching, I/O, chunking and scheduling; a stage does none of these.
 This module is the whole API a stage module uses (with :mod:`roughcontact.physics` for the
 numbers): :class:`Stage`, :class:`Var`, :class:`FileInput`, :class:`Figure`,
 :class:`StageInput`, :class:`Param`, :class:`Section`, :func:`register`,
-:func:`register_section`, :func:`register_params`, :func:`register_coords` and the errors.
+:func:`register_section`, :func:`register_params`, :func:`register_coords`, the errors and
+:func:`readable` (a quantity in SI units as a short string, for messages and figures).
 
 Metadata has one source. A variable's units and long name are written once, in its
 :class:`Var` (a stage's ``outputs`` or ``coords``, or a coordinate shared by several stages
@@ -29,10 +30,11 @@ import xarray as xr
 
 from .errors import ComputationError, SceneWarning, UserError
 from .schema import MISSING, REQUIRED, Param, Section
+from .units import readable
 
 __all__ = [
     "ComputationError", "FileInput", "Figure", "MISSING", "Param", "REQUIRED", "SceneWarning", "Section", "Stage",
-    "StageInput", "UserError", "Var", "coords", "register", "register_coords", "register_params", "register_section",
+    "StageInput", "UserError", "Var", "coords", "readable", "register", "register_coords", "register_params", "register_section",
 ]
 
 
@@ -80,7 +82,8 @@ class Figure:
     """A figure a stage can draw from stored results.
 
     ``make(results) -> matplotlib.figure.Figure`` where ``results[variant][stage]`` is a
-    Dataset (``variant`` is ``"base"`` or a name from the scene's ``[variants]``).
+    Dataset (``variant`` is ``"base"`` or a name from the scene's ``[variants]``); it returns
+    None when the scene has nothing for it to draw (no blank figures).
     ``stages`` are the stages it needs; the engine makes sure they are up to date.
     """
 

@@ -17,8 +17,8 @@ import numpy as np
 
 from roughcontact.physics.contact import effective_modulus
 from roughcontact.physics.spectra import CONVENTIONS
-from roughcontact.stage import (Param, SceneWarning, Section, UserError, Var, register_coords, register_params,
-                                register_section)
+from roughcontact.stage import (Param, SceneWarning, Section, UserError, Var, readable, register_coords,
+                                register_params, register_section)
 
 # ----------------------------------------------------------------------------------------
 # Coordinates written by several stages
@@ -118,7 +118,7 @@ def reference_wavenumber(psd, bands) -> tuple[float | None, str]:
 
 def _wavenumber(q: float) -> str:
     """A wavenumber for a message, e.g. 2e8 1/m as '2e8'."""
-    return f"{q:.4g}".replace("e+0", "e").replace("e+", "e").replace("e-0", "e-")
+    return readable(q, "1/m").removesuffix(" 1/m")
 
 
 def reference_note(psd) -> str:

@@ -7,6 +7,8 @@ import numpy as np
 
 from roughcontact.stage import UserError
 
+from .common import eta_label, legend_outside, line_style, q_reference, style, wavenumber
+
 _ANGSTROM = 1e-10
 
 
@@ -16,9 +18,10 @@ def _per_model(ds):
     return [(str(ds["model"].values) if "model" in ds.coords else "", ds)]
 
 
-def _curve(ax_a, ax_b, ds, label, style, full=False, color=None):
+def _curve(ax_a, ax_b, ds, label, kind, full=False):
     """gamma_eff/Delta_gamma on ax_a and A/A0 on ax_b against the substrate hrms, closed at the
-    vanishing hrms (marked by a dotted line) when the dataset has it."""
+    vanishing hrms (a dotted line of the case's colour, its value in the legend) when the dataset
+    has it. ``kind`` is the case (:data:`CASE_STYLES`) that sets colour, marker and line."""
     if "hrms_substrate" not in ds.dims:
         raise UserError("the adhesion figures need substrate.hrms as a sweep", key="substrate.hrms")
     h = ds["hrms_substrate"].values / _ANGSTROM
@@ -28,23 +31,23 @@ def _curve(ax_a, ax_b, ds, label, style, full=False, color=None):
     hp, gp, Ap = h, g, A
     if "hrms_substrate_vanishing" in ds:  # the end of the attached branch, where both reach 0
         hv = float(ds["hrms_substrate_vanishing"]) / _ANGSTROM
+        label += f" (vanishes at {hv:.3f} Å)"
         order = np.argsort(np.append(h, hv), kind="stable")
         hp, gp, Ap = np.append(h, hv)[order], np.append(g, 0.0)[order], np.append(A, 0.0)[order]
-    (line,) = ax_a.plot(hp, gp, style, color=color, label=label, markersize=4, markevery=list(np.flatnonzero(np.isin(hp, h))))
-    ax_b.plot(hp, Ap, style, color=line.get_color(), label=label, markersize=4, markevery=list(np.flatnonzero(np.isin(hp, h))))
-    if full:
-        ax_a.plot(h, ds["gamma_eff_full_contact"].values / dg, "-.", color=line.get_color(), label="full contact")
-    if "hrms_substrate_vanishing" in ds:
-        hv = float(ds["hrms_substrate_vanishing"]) / _ANGSTROM
         for ax in (ax_a, ax_b):
-            ax.axvline(hv, color=line.get_color(), lw=0.8, ls=":")
-        ax_b.annotate(f"{hv:.3f} Å", (hv, 0.02), rotation=90, va="bottom", ha="right", fontsize=8, color=line.get_color())
+            ax.axvline(hv, color=style(kind)["color"], lw=0.8, ls=":")
+    kw = dict(line_style(kind, hp.size, markers=10), label=label)
+    ax_a.plot(hp, gp, **kw)
+    ax_b.plot(hp, Ap, **kw)
+    if full:
+        ax_a.plot(h, ds["gamma_eff_full_contact"].values / dg, color=style(kind)["color"], linestyle=(0, (6, 2, 1, 2)),
+                  linewidth=1.0, label="full contact")
 
 
 def _axes(title):
     import matplotlib.pyplot as plt
 
-    fig, (ax_a, ax_b) = plt.subplots(1, 2, figsize=(10, 4.2))
+    fig, (ax_a, ax_b) = plt.subplots(1, 2, figsize=(12.5, 4.2), layout="constrained")
     ax_a.set_ylabel("gamma_eff / Delta_gamma")
     ax_b.set_ylabel("A / A0 at zero load")
     for ax, tag in ((ax_a, "(a)"), (ax_b, "(b)")):
@@ -52,8 +55,13 @@ def _axes(title):
         ax.set_title(tag, loc="left")
         ax.grid(alpha=0.3)
     ax_b.set_ylim(0, 1.02)
-    fig.suptitle(title)
+    fig.suptitle(title, fontsize=10)
     return fig, ax_a, ax_b
+
+
+def _title(results, variant, what):
+    qL = q_reference(results, variant)
+    return f"{what}: zero load, magnification from qL = {wavenumber(qL)} up to the surfaces' q1" if qL else what
 
 
 def figure_one_surface(results):
@@ -62,32 +70,28 @@ def figure_one_surface(results):
     ds = results[variant]["adhesion"]
     if "eta" in ds.dims:
         ds = ds.isel(eta=0)
-    fig, ax_a, ax_b = _axes("One rough surface (seed Fig. 1)")
+    fig, ax_a, ax_b = _axes(_title(results, variant, "One rough surface (seed Fig. 1)"))
     for k, (label, d) in enumerate(_per_model(ds)):
-        _curve(ax_a, ax_b, d, f"partial contact ({label})" if label else "partial contact", "-", full=(k == 0))
+        _curve(ax_a, ax_b, d, f"partial contact, {label} model" if label else "partial contact", "substrate only",
+               full=(k == 0))
     top = float(ds["gamma_eff_full_contact"].max() / ds["delta_gamma"])
     ax_a.set_ylim(0, max(1.02, 1.05 * top))
-    ax_a.legend(fontsize=8)
-    fig.tight_layout()
-    return fig
+    return legend_outside(fig, [ax_a], below=True)
 
 
 def figure_two_surfaces(results):
-    """Seed Fig 2: two rough surfaces (eta = 0 solid, +1 dotted, -1 asterisks), substrate-only for reference."""
+    """Seed Fig 2: two rough surfaces (eta = 0, +1, -1), substrate-only for reference."""
     ds = results["base"]["adhesion"]
-    fig, ax_a, ax_b = _axes("Two rough surfaces (seed Fig. 2)")
-    styles = {0.0: "-", 1.0: ":", -1.0: "*-"}
+    fig, ax_a, ax_b = _axes(_title(results, "base", "Two rough surfaces (seed Fig. 2)"))
     for label, d in _per_model(ds):
         suffix = f" ({label})" if "model" in ds.dims else ""
         if "eta" in d.dims:
             for e in d["eta"].values:
-                _curve(ax_a, ax_b, d.sel(eta=e), f"eta = {e:+g}{suffix}", styles.get(float(e), "--"))
+                _curve(ax_a, ax_b, d.sel(eta=e), eta_label(e) + suffix, eta_label(e))
         else:
-            _curve(ax_a, ax_b, d, f"pair{suffix}", "-")
+            _curve(ax_a, ax_b, d, f"pair{suffix}", "pair")
     if "substrate_only" in results:
         for label, d in _per_model(results["substrate_only"]["adhesion"]):
-            _curve(ax_a, ax_b, d, "substrate only" + (f" ({label})" if "model" in ds.dims else ""), "--", color="0.6")
+            _curve(ax_a, ax_b, d, "substrate only" + (f" ({label})" if "model" in ds.dims else ""), "substrate only")
     ax_a.set_ylim(0, 1.02 * max(1.0, float(ds["gamma_eff_macroscopic"].max() / ds["delta_gamma"])))
-    ax_a.legend(fontsize=8)
-    fig.tight_layout()
-    return fig
+    return legend_outside(fig, [ax_a], below=True)

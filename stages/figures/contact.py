@@ -1,4 +1,5 @@
-"""Figures of the contact stage: seed Figs 3 (A/A0 against p/E*) and 4 (P(sigma))."""
+"""Figures of the contact stage: seed Figs 3 (A/A0 against p/E*) and 4 (P(sigma)), at the
+magnification the title names (the seed's zeta = 4 when the scene has it, else the largest)."""
 
 from __future__ import annotations
 
@@ -6,67 +7,94 @@ import numpy as np
 
 from roughcontact.stage import UserError
 
-from .common import curve_cases
+from .common import (at_zeta, curve_cases, legend_outside, line_style, pick_zeta, q_reference, reduce_dims,
+                     selected_etas, zeta_text)
 
 
-def _cases(results):
-    return curve_cases(results, "contact")
+def _colour_map(ax, ds, E_star):
+    """A/A0 over (p/E*, eta) of a long coherence sweep, as a colour map."""
+    area = ds["contact_area_ratio"].transpose("eta", "p")
+    mesh = ax.pcolormesh(ds["p"].values / E_star, ds["eta"].values, area.values, shading="nearest",
+                         cmap="viridis", vmin=0.0, vmax=1.0)
+    ax.set_xscale("log")
+    ax.set_xlabel("p / E*")
+    ax.set_ylabel("coherence eta")
+    ax.set_title(f"A / A0 over {ds.sizes['eta']} coherences", fontsize=9)
+    ax.figure.colorbar(mesh, ax=ax, label="A / A0")
 
 
-def _at_zeta(ds, zeta):
-    return ds.sel(zeta=zeta, method="nearest") if "zeta" in ds.dims else ds
-
-
-def figure_contact_area(results, zeta=4.0):
+def figure_contact_area(results):
+    """Seed Fig. 3: A/A0 against p/E*, one curve per case. A sweep of many coherences is shown as
+    a colour map beside the seed's three cases; other sweep dimensions at their middle value."""
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(5.5, 4.2))
-    for (label, ds), marker in zip(_cases(results), "osx^dv"):
-        ds = _at_zeta(ds, zeta)
-        p = ds["p"].values / float(ds["E_star"])
-        ax.semilogx(p, ds["contact_area_ratio"].values, marker=marker, markersize=3, label=label)
+    base = results["base"]["contact"]
+    zeta = pick_zeta(base)
+    many = "eta" in base.dims and base.sizes["eta"] > len(selected_etas(base["eta"].values))
+    fig, axes = plt.subplots(1, 2 if many else 1, figsize=(11.5 if many else 7.2, 4.4), layout="constrained",
+                             squeeze=False)
+    notes = set()
+    ax = axes[0][-1]
+    for case in curve_cases(results, "contact"):
+        ds, note = reduce_dims(at_zeta(case.ds, zeta), ("p",), "contact_area_ratio")
+        notes.add(note)
+        p = np.atleast_1d(ds["p"].values) / float(ds["E_star"])
+        ax.semilogx(p, np.atleast_1d(ds["contact_area_ratio"].values), label=case.label,
+                    **line_style(case.label, p.size))
     ax.set_xlabel("p / E*")
     ax.set_ylabel("A / A0")
-    ax.set_title(f"Relative contact area, zeta = {zeta:g} (seed Fig. 3)")
     ax.set_ylim(0, 1.02)
-    ax.legend()
-    fig.tight_layout()
-    return fig
+    ax.grid(alpha=0.3)
+    if many:
+        _colour_map(axes[0][0], reduce_dims(at_zeta(base, zeta), ("p",), "contact_area_ratio")[0], float(base["E_star"]))
+        ax.set_title("the seed's cases (nearest coherences)", fontsize=9)
+    extra = "; ".join(sorted(n for n in notes if n))
+    title = f"Relative contact area (seed Fig. 3) at\n{zeta_text(zeta, q_reference(results))}" + (f"; {extra}" if extra else "")
+    if many:
+        fig.suptitle(title, fontsize=10)
+    else:
+        ax.set_title(title, fontsize=10)
+    return legend_outside(fig, [ax], below=many)
 
 
-def figure_stress_distribution(results, zeta=4.0):
-    """Seed Fig. 4: P(sigma) at three pressures (where the reference curve's A/A0 is about
-    0.1, 0.3 and 0.6), one curve per case; a delta (no roughness) is drawn as a vertical line."""
+def _pressures(reference, zeta):
+    """Three pressures where the reference case's A/A0 is about 0.1, 0.3 and 0.6."""
+    ref = reduce_dims(at_zeta(reference, zeta), ("p",), "contact_area_ratio")[0]["contact_area_ratio"]
+    return sorted({float(ref["p"][int(np.argmin(np.abs(ref.values - a)))]) for a in (0.1, 0.3, 0.6)})
+
+
+def figure_stress_distribution(results):
+    """Seed Fig. 4: P(sigma) at three pressures (where the first case's A/A0 is about 0.1, 0.3
+    and 0.6), one curve per case; a delta (no roughness: full contact) is a vertical line."""
     import matplotlib.pyplot as plt
 
-    cases = _cases(results)
-    base = _at_zeta(results["base"]["contact"], zeta)
+    cases = curve_cases(results, "contact")
+    base = results["base"]["contact"]
     if "stress_distribution" not in base:
         raise UserError("the scene does not ask for 'stress_distribution' (add it to outputs.variables)",
                         key="outputs.variables")
+    zeta = pick_zeta(base)
     E_star = float(base["E_star"])
-    ref = _at_zeta(cases[0][1], zeta)["contact_area_ratio"]
-    ref = ref.isel({d: 0 for d in ref.dims if d != "p"})
-    picks = sorted({float(ref["p"][int(np.argmin(np.abs(ref.values - a)))]) for a in (0.1, 0.3, 0.6)})
-    fig, axes = plt.subplots(1, len(picks), figsize=(4.2 * len(picks), 3.8), squeeze=False)
+    picks = _pressures(cases[0].ds, zeta)
+    fig, axes = plt.subplots(1, len(picks), figsize=(3.6 * len(picks) + 2.2, 3.8), squeeze=False, layout="constrained")
     for ax, p in zip(axes[0], picks):
         right = 0.0
-        for (label, ds), style in zip(cases, ("-", "--", ":", "-.", "-", "--")):
-            ds = _at_zeta(ds, zeta)
+        for case in cases:
+            ds = reduce_dims(at_zeta(case.ds, zeta), ("p", "stress_level"), "stress_distribution")[0]
             d = ds["stress_distribution"].sel(p=p, method="nearest")
             G = float(ds["G"])
-            if "p" in d["sigma"].dims:
-                d = d.assign_coords(sigma=d["sigma"])
+            kw = dict(color=case.style["color"], linestyle=case.style["linestyle"])
             if G > 0:
-                line, = ax.plot(d["sigma"].values / E_star, d.values * E_star, style, label=label)
+                sigma = d["sigma"].values / E_star
+                ax.plot(sigma, d.values * E_star, label=case.label, marker=case.style["marker"],
+                        markevery=max(1, sigma.size // 10), markersize=4, **kw)
                 right = max(right, (p + 5.0 * np.sqrt(G)) / E_star)
             else:
-                ax.axvline(p / E_star, linestyle=style, color="0.3", label=f"{label} (full contact: delta)")
+                ax.axvline(p / E_star, label=f"{case.label} (full contact: a delta at p)", **kw)
         ax.set_xlim(0, right or 2 * p / E_star)
         ax.set_xlabel("sigma / E*")
-        ax.set_title(f"p / E* = {p / E_star:.3g}")
+        ax.set_title(f"p / E* = {p / E_star:.3g}", fontsize=9)
+        ax.grid(alpha=0.3)
     axes[0][0].set_ylabel("P(sigma) E*")
-    axes[0][-1].legend(fontsize=8)
-    fig.suptitle(f"Stress distribution, zeta = {zeta:g} (seed Fig. 4)")
-    fig.tight_layout()
-    return fig
+    fig.suptitle(f"Stress distribution (seed Fig. 4) at {zeta_text(zeta, q_reference(results))}", fontsize=10)
+    return legend_outside(fig, list(axes[0]), below=True)

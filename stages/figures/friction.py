@@ -6,6 +6,8 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from .common import eta_label, legend_outside, line_style, q_reference, wavenumber
+
 
 def _first(da: xr.DataArray, keep: tuple[str, ...]) -> tuple[xr.DataArray, str]:
     """Reduce every dimension but ``keep`` to its first value; say which in a note."""
@@ -19,38 +21,43 @@ def _first(da: xr.DataArray, keep: tuple[str, ...]) -> tuple[xr.DataArray, str]:
 
 
 def _curves(results, which: str, etas: tuple[float, ...] | None):
-    """(label, DataArray over v, note) for substrate-only (if etas is None) and the pair's eta values."""
+    """(label, DataArray over v, note, case) for substrate-only (if etas is None) and the pair's
+    eta values; ``case`` names the style of :data:`CASE_STYLES`."""
     out = []
     base = results["base"]["friction"]
     if etas is None:
         if "substrate_only" in results:
             da, note = _first(results["substrate_only"]["friction"][which], ("v",))
-            out.append(("substrate only", da, note))
+            out.append(("substrate only", da, note, "substrate only"))
         etas = (0.0,)
     for eta in etas:
         da = base[which]
+        case = eta_label(eta)
         if "eta" in da.dims:
             hits = np.flatnonzero(np.isclose(da["eta"].values, eta))
             if not hits.size:
                 continue
             da = da.isel(eta=int(hits[0]))
-            label = "both rough, uncorrelated (eta = 0)" if eta == 0 else f"both rough, eta = {eta:+g}"
+            label = f"both rough, {case}" + (" (uncorrelated)" if eta == 0 else "")
         else:
-            label = "as in the scene"
+            label, case = "as in the scene", "pair"
         da, note = _first(da, ("v",))
-        out.append((label, da, note))
+        out.append((label, da, note, case))
     return out
 
 
 def _friction_figure(results, which, etas, title, ylabel, logy=False):
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(5.8, 4.3))
+    fig, ax = plt.subplots(figsize=(7.8, 4.3), layout="constrained")
     notes = set()
-    for (label, da, note), marker in zip(_curves(results, which, etas), "o*+xsd"):
-        ax.semilogx(da["v"].values, da.values, marker=marker, markersize=4, label=label)
+    for label, da, note, case in _curves(results, which, etas):
+        ax.semilogx(da["v"].values, da.values, label=label, **line_style(case, da.sizes["v"], markers=15))
         if note:
             notes.add(note)
+    qL = q_reference(results)
+    if qL:
+        notes.add(f"q from qL = {wavenumber(qL)}")
     ax.set_xlabel("sliding velocity v (m/s)")
     ax.set_ylabel(ylabel)
     ax.set_title(title + (f"\n({'; '.join(sorted(notes))})" if notes else ""), fontsize=10)
@@ -59,9 +66,7 @@ def _friction_figure(results, which, etas, title, ylabel, logy=False):
     else:
         ax.set_ylim(bottom=0)
     ax.grid(True, which="both" if logy else "major", alpha=0.3)
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    return fig
+    return legend_outside(fig)
 
 
 def figure_mu_substrate(results):
@@ -88,7 +93,7 @@ def figure_psds(results):
     import matplotlib.pyplot as plt
 
     psd = results["base"]["psd"]
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4.2))
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.2), layout="constrained")
     for ax, name, title in ((axes[0], "solid", "(a) elastic solid (rubber)"), (axes[1], "substrate", "(b) substrate")):
         da, note = _first(psd[f"psd_{name}"], ("q",))
         q = da["q"].values
@@ -97,20 +102,19 @@ def figure_psds(results):
         if not np.any(mask):
             ax.text(0.5, 0.5, "smooth", transform=ax.transAxes, ha="center")
         else:
-            ax.loglog(q[mask], C[mask], "-", label="C(q)")
+            ax.loglog(q[mask], C[mask], "-", color="C0", label="C(q)")
             H = da.attrs.get("H")
             if H is not None:
                 q0 = float(da.attrs.get("q0", q[mask][0]))
                 ref = C[mask][np.searchsorted(q[mask], q0)] if q0 >= q[mask][0] else C[mask][0]
                 qq = q[mask][q[mask] >= q0]
-                ax.loglog(qq, 3.0 * ref * (qq / q0) ** (-2.0 * (1.0 + H)), "--",
-                          label=f"slope -2(1+H) = {-2 * (1 + H):.2f}")
+                ax.loglog(qq, 3.0 * ref * (qq / q0) ** (-2.0 * (1.0 + H)), "--", color="C1",
+                          label="slope -2(1+H), shifted up")
             hrms = float(np.sqrt(2 * np.pi * np.trapezoid(q * np.where(mask, C, 0.0), q)))
             ax.set_title(f"{title}: hrms = {hrms * 1e6:.3g} um" + (f" ({note})" if note else ""), fontsize=10)
-            ax.legend(fontsize=8)
         ax.set_xlabel("wavenumber q (1/m)")
         ax.set_ylabel("C(q) (m^4)")
         ax.grid(True, alpha=0.3)
-    fig.suptitle("Power spectral densities (seed Fig. 6)")
-    fig.tight_layout()
-    return fig
+    fig.suptitle(f"Power spectral densities (seed Fig. 6); q grid from qL = {wavenumber(psd['q'].values[0])}",
+                 fontsize=10)
+    return legend_outside(fig, below=True)

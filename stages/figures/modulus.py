@@ -4,12 +4,14 @@ from __future__ import annotations
 
 import numpy as np
 
+from .common import legend_outside
+
 
 def figure_modulus(results):
     import matplotlib.pyplot as plt
 
     ds = results["base"]["modulus"]
-    fig, ax = plt.subplots(figsize=(5.8, 4.3))
+    fig, ax = plt.subplots(figsize=(7.6, 4.3), layout="constrained")
     f = ds["omega"].values / (2.0 * np.pi)
     temps = np.atleast_1d(ds["T"].values)
     colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
@@ -26,7 +28,5 @@ def figure_modulus(results):
     top = float(np.nanmax(ds["loss_modulus"].values))
     if top > 0:
         ax.set_ylim(bottom=max(ax.get_ylim()[0], 1e-3 * top))
-    ax.legend(fontsize=8)
     ax.grid(True, which="major", alpha=0.3)
-    fig.tight_layout()
-    return fig
+    return legend_outside(fig)

@@ -1,46 +1,39 @@
-"""Figure of the separation stage: seed Fig. 5 (log10(p/E*) against the mean separation u)."""
+"""Figure of the separation stage: seed Fig. 5 (log10(p/E*) against the mean separation u), at
+the magnification the title names (the seed's zeta = 4 when the scene has it, else the largest)."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from .common import curve_cases
-
-_STYLES = (dict(marker="o", markersize=3, linestyle="-", linewidth=0.8), dict(marker="*", markersize=5),
-           dict(linestyle="-", linewidth=2), dict(linestyle=":", linewidth=2), dict(linestyle="--"),
-           dict(linestyle="-."))
+from .common import at_zeta, curve_cases, legend_outside, line_style, pick_zeta, q_reference, reduce_dims, zeta_text
 
 
-def figure_separation(results, zeta=4.0):
-    """log10(p/E*) against u (seed Fig. 5) at zeta = 4 (nearest available magnification), with
-    the small-pressure law u = u0 ln(beta E*/p) (eqs 58-60) as thin dashed lines."""
+def figure_separation(results):
+    """log10(p/E*) against u (seed Fig. 5), one curve per case, with the small-pressure law
+    u = u0 ln(beta E*/p) (eqs 58-60) as thin dashed lines of the same colour."""
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(6.0, 4.5))
-    zeta_used = None
-    for i, ((label, ds), style) in enumerate(zip(curve_cases(results, "separation"), _STYLES)):
-        if "zeta" in ds.dims:
-            ds = ds.sel(zeta=zeta, method="nearest")
-        zeta_used = float(ds["zeta"])
+    fig, ax = plt.subplots(figsize=(7.6, 4.6), layout="constrained")
+    zeta = pick_zeta(results["base"]["separation"])
+    notes = set()
+    for i, case in enumerate(curve_cases(results, "separation")):
+        ds, note = reduce_dims(at_zeta(case.ds, zeta), ("p",), "mean_separation")
+        notes.add(note)
         u = np.atleast_1d(ds["mean_separation"].values)
         p = np.atleast_1d(ds["p"].values) / float(ds["E_star"])
-        label = label.replace("+0", "0")
-        if np.all(u == 0):
-            label += " (u = 0: no combined roughness)"
-        if "marker" in style:
-            style = dict(style, markevery=max(1, u.size // 25))
-        line, = ax.plot(u * 1e9, np.log10(p), label=label, **style)
+        label = case.label + (" (u = 0: no combined roughness)" if np.all(u == 0) else "")
+        ax.plot(u * 1e9, np.log10(p), label=label, **line_style(case.label, u.size))
         u0, beta = float(ds["separation_u0"]), float(ds["separation_beta"])
         if u0 > 0 and np.isfinite(beta):
             law = u0 * np.log(beta / p)
             keep = law > 0
-            ax.plot(law[keep] * 1e9, np.log10(p[keep]), "--", color=line.get_color(), linewidth=0.7, alpha=0.7,
+            ax.plot(law[keep] * 1e9, np.log10(p[keep]), "--", color=case.style["color"], linewidth=0.7, alpha=0.7,
                     label="u0 ln(beta E*/p) (eqs 58-60)" if i == 0 else None)
     ax.set_xlabel("mean separation u (nm)")
     ax.set_ylabel("log10(p / E*)")
     ax.set_xlim(left=-0.03 * ax.get_xlim()[1])
-    ax.set_title(f"Interfacial separation, zeta = {zeta_used:g} (seed Fig. 5)")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    return fig
+    extra = "; ".join(sorted(n for n in notes if n))
+    ax.set_title(f"Interfacial separation (seed Fig. 5) at\n{zeta_text(zeta, q_reference(results))}"
+                 + (f"; {extra}" if extra else ""), fontsize=10)
+    return legend_outside(fig)

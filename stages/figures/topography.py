@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .common import legend_outside
+
 
 def _finish(fig, ax, ylabel, title):
     """Axis labels, title, grid and legend of a spectrum-like figure over q."""
@@ -11,8 +13,7 @@ def _finish(fig, ax, ylabel, title):
     ax.set_ylabel(ylabel)
     ax.set_title(title)
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
-    return fig
+    return legend_outside(fig)
 
 
 def figure_measured_psd(results):
@@ -21,7 +22,7 @@ def figure_measured_psd(results):
     import matplotlib.pyplot as plt
 
     ds = results["base"]["topography"]
-    fig, ax = plt.subplots(figsize=(6.4, 4.6), constrained_layout=True)
+    fig, ax = plt.subplots(figsize=(8.6, 4.6), layout="constrained")
     for name, colour in (("substrate", "C0"), ("solid", "C3")):
         var = f"psd_{name}_measured"
         if var not in ds:
@@ -38,16 +39,14 @@ def figure_measured_psd(results):
 
 
 def figure_coherence(results):
-    """The measured coherence eta(q) with a band of two standard errors (a note when the
-    surfaces are not paired)."""
+    """The measured coherence eta(q) with a band of two standard errors; None (no figure) when
+    the surfaces are not paired."""
     import matplotlib.pyplot as plt
 
     ds = results["base"]["topography"]
-    fig, ax = plt.subplots(figsize=(6.4, 4.0), constrained_layout=True)
     if "coherence" not in ds:
-        ax.text(0.5, 0.5, "no paired topographies: coherence not measured", ha="center", va="center", transform=ax.transAxes)
-        ax.set_axis_off()
-        return fig
+        return None  # no paired topographies: nothing to draw (the plot command says so)
+    fig, ax = plt.subplots(figsize=(8.6, 4.0), layout="constrained")
     q, eta, e = ds["q_substrate_measured"].values, ds["coherence"].values, ds["coherence_error"].values
     ok = np.isfinite(eta)
     ax.fill_between(q[ok], eta[ok] - 2 * e[ok], eta[ok] + 2 * e[ok], color="C2", alpha=0.25, lw=0, label="2 s.e.")
