@@ -44,8 +44,17 @@ def auto_chunks(sizes: Mapping[str, int], budget_points: int, explicit: Mapping[
 
 @contextlib.contextmanager
 def scheduler(setting: str) -> Iterator[object]:
-    """Yield what :func:`write_blocks` computes with: a dask scheduler name or a distributed Client."""
-    if setting in ("threads", "processes", "synchronous", "sync"):
+    """Yield what :func:`write_blocks` computes with: a dask scheduler name, a process pool (one
+    for the whole run: a pool per batch of blocks would start and import in new processes every
+    time) or a distributed Client."""
+    if setting == "processes":
+        import multiprocessing
+        from concurrent.futures import ProcessPoolExecutor
+
+        with ProcessPoolExecutor(dask.system.CPU_COUNT, mp_context=multiprocessing.get_context("spawn")) as pool:
+            yield pool
+        return
+    if setting in ("threads", "synchronous", "sync"):
         yield setting
         return
     if "://" in setting or setting.count(":") == 1:
@@ -133,7 +142,10 @@ def write_blocks(path, ds: xr.Dataset, names: list[str], compute_with, progress_
         groups.setdefault((var.dims, var.chunks), []).append(name)
     total = sum(math.prod(len(c) for c in chunks) for (_, chunks) in groups)
     bar = Progress(total, "writing", progress_stream)
-    client = compute_with if not isinstance(compute_with, str) else None
+    from concurrent.futures import Executor
+
+    pool = compute_with if isinstance(compute_with, Executor) else None
+    client = compute_with if not isinstance(compute_with, str) and pool is None else None
     if in_flight is None:
         workers = len(client.scheduler_info()["workers"]) if client is not None else (dask.system.CPU_COUNT or 2)
         in_flight = max(2, 2 * workers)
@@ -155,6 +167,8 @@ def write_blocks(path, ds: xr.Dataset, names: list[str], compute_with, progress_
                 if client is not None:
                     futures = client.compute(tasks)
                     results = client.gather(futures)
+                elif pool is not None:
+                    results = dask.compute(*tasks, scheduler="processes", pool=pool)
                 else:
                     results = dask.compute(*tasks, scheduler=compute_with)
                 for idx, values in zip(batch, results):

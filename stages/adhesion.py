@@ -69,7 +69,7 @@ register_section(
 register_params(
     "numerics",
     Param("adhesion_points_per_decade", "int", default=10, lo=2, presets={"fast": 5, "accurate": 20},
-          ladder=(3, 4, 5, 7, 10, 14, 20, 28, 40),
+          ladder=(3, 4, 5, 7, 10, 14, 20, 28),  # the presets at rungs 2, 4, 6; 40 (minutes) is not needed
           doc="adhesion: Volterra nodes per decade of (zeta - 1)"),
     Param("adhesion_zeta_offset", "quantity", "", default=1e-10, lo=0.0, lo_open=True, hi=1e-2,
           doc="adhesion: smallest zeta - 1 of the Volterra grid (geometric refinement towards zeta = 1)"),

@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from roughcontact.physics.estimators import valid_bins
 from roughcontact.physics.quadrature import log_grid
 from roughcontact.physics.spectra import (
     CONVENTIONS,
@@ -51,10 +52,29 @@ def _measured(name: str, spec: dict, spectrum, q_grid: np.ndarray) -> tuple[np.n
     return extend_psd(q_grid, q_si, C, how if how != "none" else "zero"), attrs
 
 
+def _measured_knots(inp: StageInput) -> list[float]:
+    """The wavenumbers between which a measured PSD is interpolated as a power law (the bins of a
+    measured map, the rows of a PSD file). As nodes of the q grid they let the power-law
+    quadrature integrate the interpolated PSD exactly at any points_per_decade (between them it
+    would cut the kinks). A table denser than the grid is left out: the grid would grow to its size."""
+    knots, top = [], inp.upstream.get("topography")
+    for name in SURFACES:
+        spec = inp[name]
+        if not is_rough(spec) or spec["kind"] == "self_affine" or (spec["kind"] == "topography" and top is None):
+            continue
+        if spec["kind"] == "topography":
+            q = valid_bins(top[f"q_{name}_measured"].values, top[f"psd_{name}_measured"].values, positive=True)[0]
+        else:
+            q = inp.files[f"{name}.path"].q
+        if q.size >= 2 and q.size <= inp["numerics.points_per_decade"] * np.log10(q[-1] / q[0]) + 1:
+            knots += [float(k) for k in q]
+    return knots
+
+
 def _q_range(inp: StageInput) -> tuple[float, float, list[float]]:
     bands = surface_bands(inp, inp.upstream.get("topography"))
     knots = [inp[name][k] for name in SURFACES if is_rough(inp[name]) and inp[name]["kind"] == "self_affine"
-             for k in ("qL", "q0", "q1")]
+             for k in ("qL", "q0", "q1")] + _measured_knots(inp)
     lo = inp["grid.q_min"] or (min(b.lo for b in bands.values()) if bands else None)
     hi = inp["grid.q_max"] or (max(b.hi for b in bands.values()) if bands else None)
     if lo is None or hi is None:
@@ -146,7 +166,7 @@ def _files(name: str) -> FileInput:
 register(
     Stage(
         name="psd",
-        version="1",
+        version="2",
         compute=compute_psd,
         validate=validate_psd,
         params=("substrate", "solid", "interface.eta", "grid.q_min", "grid.q_max", "numerics.points_per_decade"),

@@ -52,10 +52,10 @@ register_section(
 register_params(
     "numerics",
     Param("separation_panels_per_decade", "int", default=2, lo=1,
-          presets={"fast": 1, "accurate": 4}, ladder=(1, 2, 2, 3, 4, 6, 8, 16),
+          presets={"fast": 1, "accurate": 4}, ladder=(1, 2, 2, 3, 4, 6, 8, 16, 16),
           doc="geometric panels per decade of s = 1/w in the separation integral"),
     Param("separation_gauss_points", "int", default=3, lo=1, hi=64,
-          presets={"fast": 2, "accurate": 4}, ladder=(2, 2, 3, 3, 4, 4, 6, 10),
+          presets={"fast": 2, "accurate": 4}, ladder=(2, 2, 3, 3, 4, 4, 6, 10, 10),
           doc="Gauss-Legendre nodes per panel in the separation integral"),
     Param("separation_depth", "quantity", "", default=10.0, lo=1.0, hi=100.0,
           doc="decades of s below 1/w(q_max) resolved by panels (closed form below)"),
