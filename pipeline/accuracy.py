@@ -56,7 +56,7 @@ def resolution_params(stage_list: list[Stage]) -> dict[str, object]:
     return out
 
 
-def _with(scene: Scene, settings: dict[str, object], preset: str | None = None) -> Scene:
+def with_settings(scene: Scene, settings: dict[str, object], preset: str | None = None) -> Scene:
     raw = copy.deepcopy(scene.raw)
     raw.pop("variants", None)
     for dotted, value in settings.items():
@@ -154,10 +154,10 @@ def measure_stage(scene: Scene, st: Stage, workdir: Path, progress: bool = False
         return res["base"][st.name], float(np.median(times))
 
     try:
-        warm, _ = timed(_with(scene, settings[0]), "warm-up")  # imports and caches, not measured (the cheapest rung)
+        warm, _ = timed(with_settings(scene, settings[0]), "warm-up")  # imports and caches, not measured (the cheapest rung)
         fixed = _fixed_magnifications(scene, needed, warm)
-        rung_scenes = [_with(scene, {**s, **fixed}) for s in settings]
-        preset_scenes = {name: _with(scene, fixed, name) for name in PRESETS}
+        rung_scenes = [with_settings(scene, {**s, **fixed}) for s in settings]
+        preset_scenes = {name: with_settings(scene, fixed, name) for name in PRESETS}
         keys = [_settings_of(sc, needed) for sc in rung_scenes]
         same = {name: next((i for i, k in enumerate(keys) if k == _settings_of(sc, needed)), None)
                 for name, sc in preset_scenes.items()}

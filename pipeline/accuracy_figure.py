@@ -50,7 +50,7 @@ def figure(ds: xr.Dataset):
                    label=f"{name}: target of the default")
         times += list(t[ok])
         errors += list(np.maximum(e[ok], SMALLEST))
-        errors.append(float(ds["tolerance"][i]))
+        errors.append(0.3 * float(ds["tolerance"][i]))  # the target line inside the axes, not on an edge
     for preset, marker in PRESET_MARKERS.items():
         ax.plot([], [], marker, color="0.3", markersize=9, markerfacecolor="none", label=f"preset {preset}")
     ax.set_xlim(*_decades(times))
