@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .common import legend_outside
+from .common import legend_outside, wavenumber
 
 
 def _finish(fig, ax, ylabel, title):
@@ -35,7 +35,10 @@ def figure_measured_psd(results):
         if "psd" in results["base"]:
             p = results["base"]["psd"]
             ax.loglog(p["q"].values, p[f"psd_{name}"].values, "-", color=colour, lw=0.8, label=f"{name}: on the psd stage's q grid")
-    return _finish(fig, ax, "C(q) (m$^4$, Persson convention)", "Measured power spectral densities")
+    title = "Measured power spectral densities"
+    if "psd" in results["base"]:
+        title += f"\n(the psd stage's q grid from qL = {wavenumber(float(results['base']['psd']['q'][0]))})"
+    return _finish(fig, ax, "C(q) (m$^4$, Persson convention)", title)
 
 
 def figure_coherence(results):
