@@ -444,5 +444,5 @@ def read_master_curve(path: Path, *, key: str = "modulus", columns=(0, 1, 2), fr
                        attrs={"source_file": str(path), "frequency_column": f"{f_unit} ({kind})"})
 
 
-READERS = {"table": read_table, "netcdf": read_netcdf, "auto": read_auto, "topography": read_topography,
-           "spectrum": read_spectrum, "master_curve": read_master_curve}
+READERS = {"table": read_table, "netcdf": read_netcdf, "auto": read_auto, "topography": read_topography, "spectrum": read_spectrum,
+           "master_curve": read_master_curve, "dma": lambda path, **kw: __import__(f"{__package__}.dma", fromlist=["read_dma"]).read_dma(path, **kw)}
