@@ -190,7 +190,7 @@ class _March:
 
 
 def flash_march(q, C, v, T_start, omega_grid, storage, loss, n_phi, sigma0, nu, conductivity, diffusivity, shift,
-                correction="none", gamma=0.5, tolerance=1e-8, max_shift=0.05):
+                correction="none", gamma=0.5, tolerance=1e-6, max_shift=0.05):
     """T_q, A, B and G along the q grid with the flash temperature, by marching in q.
 
     The initial-value problem dT/dq = F(q, T, G) (:func:`heating_rate`), dG/dq = (k^2/2) q^3 C A(q, T),
@@ -263,7 +263,7 @@ def flash_march(q, C, v, T_start, omega_grid, storage, loss, n_phi, sigma0, nu, 
 
 
 def flash_friction_kernel(q, C, v, T_start, omega_grid, storage, loss, n_phi, sigma0, nu, conductivity, diffusivity,
-                          shift, correction="none", gamma=0.5, segment_nodes=12, tolerance=1e-8, max_shift=0.05,
+                          shift, correction="none", gamma=0.5, segment_nodes=12, tolerance=1e-6, max_shift=0.05,
                           profile=False):
     """mu(v), A/A0(v) and the flash temperature with the modulus at E(q v cos phi, T_q).
 

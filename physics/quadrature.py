@@ -13,6 +13,8 @@ wrapped with ``xarray.apply_ufunc`` by the stages).
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 
@@ -157,13 +159,22 @@ def gauss_legendre_panels(edges, order: int):
         of ``f`` from ``edges[..., 0]`` to ``edges[..., -1]``.
     """
     edges = np.asarray(edges, dtype=float)
-    t, w = np.polynomial.legendre.leggauss(int(order))
+    t, w = _leggauss(int(order))
     a, b = edges[..., :-1, None], edges[..., 1:, None]
     half = 0.5 * (b - a)
     nodes = 0.5 * (a + b) + half * t
     weights = half * w
     shape = edges.shape[:-1] + (-1,)
     return nodes.reshape(shape), np.broadcast_to(weights, nodes.shape).reshape(shape)
+
+
+@functools.lru_cache(maxsize=64)
+def _leggauss(order: int):
+    """Gauss-Legendre nodes and weights on [-1, 1] (cached: the kernels ask for the same few
+    orders thousands of times; the arrays are read-only)."""
+    t, w = np.polynomial.legendre.leggauss(order)
+    t.flags.writeable = w.flags.writeable = False
+    return t, w
 
 
 def inverse_cumulative_integral(x, y, level):

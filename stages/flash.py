@@ -43,12 +43,14 @@ FLASH_NUMERICS = (
 
 FLASH_KEYS = tuple(f"friction.{p.name}" for p in FLASH_PARAMS) + tuple(f"numerics.{p.name}" for p in FLASH_NUMERICS)
 
-#: outputs the friction stage writes with the flash temperature
+#: outputs the friction stage writes with the flash temperature (when asked for in outputs.variables)
 FLASH_OUTPUTS = {
-    "friction_coefficient_isothermal": Var("1", "hysteretic friction coefficient without flash temperature (eq 61)"),
-    "flash_temperature": Var("K", "temperature of the asperity contacts at the highest magnification, T_q at q1"),
+    "friction_coefficient_isothermal": Var("1", "hysteretic friction coefficient without flash temperature (eq 61)",
+                                           optional=True),
+    "flash_temperature": Var("K", "temperature of the asperity contacts at the highest magnification, T_q at q1",
+                             optional=True),
     "background_temperature_rise": Var("K", "background (cumulative) temperature rise of the nominal contact at the "
-                                            "end of sliding (semi-infinite rubber)"),
+                                            "end of sliding (semi-infinite rubber)", optional=True),
     "flash_temperature_profile": Var("K", "temperature T_q of the contacts observed at magnification q", optional=True),
     "frictional_heating": Var("W/m^2", "heat released per unit nominal area and time per unit ln q, "
                                        "sigma0 v d mu / d ln q", optional=True),
@@ -112,7 +114,7 @@ def _kernel(q, C, v, T_s, grid, Ep, Epp, p, nu, *, law, thermal, n_phi, correcti
 
     def run(T_start, with_profile):
         return flash_friction_kernel(q, C, v, T_start, grid, Ep, Epp, n_phi, p, nu, lam, D, shift, correction, gamma,
-                                     n_seg, 1e-8, max_shift, with_profile)
+                                     n_seg, 1e-6, max_shift, with_profile)
 
     rise = np.zeros(np.broadcast_shapes(np.shape(v), np.shape(T_s), np.shape(p), np.shape(C)[:-1]))
     if background == "semi_infinite":
@@ -144,12 +146,10 @@ def compute_flash(inp, q, C, v, p, mod, nu, thermal, n_phi, n_seg, correction, g
     names = ["friction_coefficient", "sliding_contact_area_ratio", "flash_temperature", "background_temperature_rise",
              "flash_temperature_profile", "frictional_heating"]
     result = dict(zip(names, outputs))
-    if background == "none":
-        del result["background_temperature_rise"]
-    for name in ("flash_temperature_profile", "frictional_heating"):
-        if name in result and name not in inp.wanted:
-            del result[name]
-    return result
+    if background == "none" and "background_temperature_rise" in inp.wanted:
+        raise UserError("background_temperature_rise needs a background heating model", key="friction.background")
+    return {name: value for name, value in result.items()
+            if name in ("friction_coefficient", "sliding_contact_area_ratio") or name in inp.wanted}
 
 
 def flash_attrs(inp, thermal) -> dict:

@@ -109,7 +109,8 @@ def compute_friction(inp: StageInput) -> xr.Dataset:
     flash = compute_flash(inp, q, psd["psd_combined"], v, p, mod, nu, thermal, n_phi, n_seg, correction, gamma) \
         if thermal is not None else {}
     if flash:
-        flash["friction_coefficient_isothermal"] = mu
+        if "friction_coefficient_isothermal" in inp.wanted:
+            flash["friction_coefficient_isothermal"] = mu
         mu, area = flash.pop("friction_coefficient"), flash.pop("sliding_contact_area_ratio")
     S_text = "S = 1" if correction == "none" else f"S = {gamma:g} + {1 - gamma:g} P^2"
     mu.attrs = {"formula": "mu = 2/((1-nu^2) sigma0) int dq q^3 C P S int_0^(pi/2) cos(phi) E''(q v cos phi) dphi, "
