@@ -29,7 +29,7 @@ def figure_flash(results):
     T0 = ds["T"] if "T" in ds.coords else None
     for k, eta in enumerate(etas):
         c = colors[k % len(colors)]
-        label = f"eta = {eta:+g}" if "eta" in ds.dims else "as in the scene"
+        label = f"eta = {eta:g}" if "eta" in ds.dims else "as in the scene"
         mu, note = _select(ds["friction_coefficient"], eta)
         iso, _ = _select(ds["friction_coefficient_isothermal"], eta)
         flash, _ = _select(ds["flash_temperature"], eta)
@@ -52,6 +52,8 @@ def figure_flash(results):
     right.legend(fontsize=7)
     for ax in (left, right):
         ax.grid(True, which="major", alpha=0.3)
+    if T0 is not None and T0.ndim == 0:
+        notes.add(f"T = {float(T0) - 273.15:.4g} °C")
     note = "; ".join(sorted(n for n in notes if n))
     fig.suptitle("Flash temperature (Persson 2006)" + (f" ({note})" if note else ""), fontsize=10)
     fig.tight_layout()

@@ -21,9 +21,9 @@ def figure_master_curve(results):
     for T in temps:
         mine = np.isclose(T_pts, T)
         c = shade(T)
-        left.loglog(w[mine], ds["dma_storage_modulus"].values[mine], "o", ms=3.5, color=c, label=f"{T - 273.15:.4g} °C")
+        left.loglog(w[mine], ds["dma_storage_modulus"].values[mine], "o", ms=3.5, color=c, label=f"{T - 273.15:.1f} °C")
         left.loglog(w[mine], ds["dma_loss_modulus"].values[mine], "^", ms=3.5, mfc="none", color=c)
-    grid = np.geomspace(w.min() / 10, w.max() * 10, 400)
+    grid = np.geomspace(w.min() / 3, w.max() * 3, 400)  # the fitted spectrum, just beyond the data
     Ep, Epp = prony_modulus(grid, float(ds["relaxed_modulus"]), ds["relaxation_strength"].values,
                             ds["relaxation_time"].values)
     left.loglog(grid, Ep, "k-", lw=1.2, label="E' master curve (fitted spectrum)")
