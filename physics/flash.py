@@ -22,10 +22,11 @@ with B the angular integral of cos(phi) E''(q v cos phi, T_q) (:mod:`roughcontac
 and Theta(x) = [(x - 1/2) erf(sqrt x) + sqrt(x/pi) e^-x] / x the passage average of
 erf(q sqrt(D t)) (1D short-time limit (4/3 sqrt(pi)) sqrt x, steady 3D limit 1).
 
-This is an initial-value problem in q, T(q0) = T_start, solved by marching the q grid with a
-predictor-corrector on the project's power-law quadrature: no fixed-point iteration over the whole
-q range, hence no spurious solution; the solution is unique because the right-hand side is
-Lipschitz in T. Background (cumulative) heating of the nominal contact over a sliding time is the
+This is an initial-value problem in q, T(q0) = T_start, solved by marching the q grid: each step
+is the trapezoid rule of the project's power-law quadrature, implicit in T and solved by the one
+root finder on a bracket that starts at the previous temperature. There is no fixed-point
+iteration over the whole q range, hence no spurious solution; the solution is unique because the
+right-hand side is Lipschitz in T. Background (cumulative) heating of the nominal contact over a sliding time is the
 Duhamel integral of the mean flux mu sigma0 v into a semi-infinite rubber, marched in time
 (:func:`background_march`). See docs/theory.md, section "Flash temperature".
 """
