@@ -236,7 +236,7 @@ def register_params(section_name: str, *params: Param, doc: str = "") -> None:
             raise ValueError(f"parameter {section_name}.{p.name} registered twice")
         names.add(p.name)
     new = tuple(p for p in params if p not in current.params)
-    _SECTIONS[section_name] = dataclasses.replace(current, params=current.params + new)
+    _SECTIONS[section_name] = dataclasses.replace(current, params=current.params + new, doc=current.doc or doc)
 
 
 def stages() -> dict[str, Stage]:
