@@ -51,10 +51,30 @@ def zeta_values(inp, q: np.ndarray) -> np.ndarray:
     if isinstance(zeta, str):
         return q / q[0]
     zeta = np.atleast_1d(np.asarray(zeta, dtype=float))
-    top = q[-1] / q[0]
+    _check_zeta(zeta, q[-1] / q[0])
+    return zeta
+
+
+def _check_zeta(zeta: np.ndarray, top: float) -> None:
     if np.any(zeta > top * (1 + 1e-12)):
         raise UserError(f"magnification {zeta.max():g} beyond the q grid (zeta <= q_max/qL = {top:.6g})", key="contact.zeta")
-    return zeta
+
+
+def zeta_key(inp) -> str:
+    """The scene key that sets the number of magnifications (for messages about sizes)."""
+    return "numerics.points_per_decade" if isinstance(inp["contact.zeta"], str) else "contact.zeta"
+
+
+def zeta_count(inp, psd) -> int:
+    """Before anything computes: how many magnifications ``[contact] zeta`` asks for, checked
+    against the q grid of the psd stage's ``psd`` preview (its size and range)."""
+    zeta = inp["contact.zeta"]
+    if isinstance(zeta, str):
+        return int(psd.sizes["q"])
+    zeta = np.atleast_1d(np.asarray(zeta, dtype=float))
+    lo, hi = psd.ranges["q"]
+    _check_zeta(zeta, hi / lo)
+    return int(zeta.size)
 
 
 # ----------------------------------------------------------------------------------------
