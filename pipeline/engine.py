@@ -74,8 +74,13 @@ def default_outdir(scene: Scene) -> Path:
     return Path("outputs") / scene.name
 
 
-def plan(scene: Scene, outdir: Path, targets: Iterable[str] | None = None, force: Iterable[str] = ()) -> list[StagePlan]:
-    """Plan every needed stage of the scene and of each of its variants."""
+def plan(scene: Scene, outdir: Path, targets: Iterable[str] | None = None, force: Iterable[str] = (),
+         verify: bool | None = None) -> list[StagePlan]:
+    """Plan every needed stage of the scene and of each of its variants.
+
+    A stored result with the right key is fresh if its data still match their checksum
+    (:mod:`roughcontact.integrity`), checked for files up to ``integrity.VERIFY_LIMIT_BYTES``
+    (``verify`` None), for every file (True) or for none (False)."""
     scene, outdir, targets, force = _arguments(scene, outdir, targets, force)
     targets = tuple(targets) if targets is not None else scene.outputs
     unknown = force - set(stages()) - {"all"}
@@ -85,7 +90,7 @@ def plan(scene: Scene, outdir: Path, targets: Iterable[str] | None = None, force
     for variant, sc in (("base", scene), *scene.variants.items()):
         keys: dict[str, str] = {}
         for st in needed_stages(sc, targets):
-            p = _plan_stage(sc, variant, st, outdir, keys, targets, force)
+            p = _plan_stage(sc, variant, st, outdir, keys, targets, force, verify)
             keys[st.name] = p.key
             plans.append(p)
     return plans
@@ -120,7 +125,22 @@ def _sha256(path: Path, param: str) -> str:
         raise UserError(f"cannot read: {exc.strerror or exc}", file=str(path), key=param) from None
 
 
-def _plan_stage(scene, variant, st, outdir, keys, targets, force) -> StagePlan:
+def _damaged(path: Path, verify: bool | None) -> str | None:
+    """Why a stored result whose key matches cannot be trusted (its checksum), or None."""
+    from . import integrity
+
+    if verify is False or verify is None and path.stat().st_size > integrity.VERIFY_LIMIT_BYTES:
+        return None
+    try:
+        ok = integrity.verify(path)
+    except (OSError, RuntimeError, ValueError):
+        ok = False
+    if ok is None:
+        return "stored without a checksum (by an older roughcontact)"
+    return None if ok else "stored data or attributes differ from their checksum (edited or damaged since written)"
+
+
+def _plan_stage(scene, variant, st, outdir, keys, targets, force, verify=None) -> StagePlan:
     params = {name: scene.get(name) for name in st.params}
     absent = [name for name, value in params.items() if value is MISSING]
     if absent:
@@ -155,7 +175,8 @@ def _plan_stage(scene, variant, st, outdir, keys, targets, force) -> StagePlan:
     if stored is None:
         status, reasons = "missing", ["no result yet" if not path.exists() else "existing file is unreadable"]
     elif stored.get("stage_key") == key and st.name not in force and "all" not in force:
-        status, reasons = "fresh", []
+        damage = _damaged(path, verify)
+        status, reasons = ("stale", [damage]) if damage else ("fresh", [])
     else:
         status = "stale"
         reasons = _why_stale(stored, record) if stored.get("stage_key") != key else ["forced"]
@@ -260,13 +281,14 @@ LOAD_LIMIT_BYTES = preflight.LOAD_LIMIT_BYTES
 
 def run(scene: Scene, outdir: Path, targets: Iterable[str] | None = None, force: Iterable[str] = (),
         report: Reporter | None = None, scheduler: str | None = None,
-        lock_timeout: float | None = None) -> dict[str, dict[str, xr.Dataset]]:
+        lock_timeout: float | None = None, verify: bool | None = None) -> dict[str, dict[str, xr.Dataset]]:
     """Bring every needed stage up to date; return ``results[variant][stage]``.
 
     ``scheduler`` overrides the scene's ``[run] scheduler`` ('threads', 'processes',
     'synchronous' or a dask.distributed address). Small results are returned in memory, large
     ones lazily. The run holds the output folder's lock (:mod:`roughcontact.preflight`); another
     run on the same folder waits for it (at most ``lock_timeout`` seconds, None: until it ends).
+    ``verify``: check the checksums of reused results of every size (see :func:`plan`).
     """
     from .compute import scheduler as open_scheduler
 
@@ -274,11 +296,11 @@ def run(scene: Scene, outdir: Path, targets: Iterable[str] | None = None, force:
     report = report or Reporter()
     outdir = preflight.output_folder(outdir)
     with preflight.locked(outdir, report, lock_timeout), open_scheduler(scheduler or scene.get("run.scheduler")) as compute_with:
-        return _run(scene, outdir, targets, force, report, compute_with)
+        return _run(scene, outdir, targets, force, report, compute_with, verify)
 
 
-def _run(scene, outdir, targets, force, report, compute_with):
-    plans = plan(scene, outdir, targets, force)
+def _run(scene, outdir, targets, force, report, compute_with, verify=None):
+    plans = plan(scene, outdir, targets, force, verify)
     scenes = {"base": scene, **scene.variants}
     store.clean_temporaries(outdir)
     for folder in {p.path.parent for p in plans}:
@@ -333,7 +355,9 @@ def _open(path: Path) -> xr.Dataset:
     """A stored result: in memory if small, else opened lazily with the file's own chunking."""
     if path.stat().st_size <= LOAD_LIMIT_BYTES:
         return store.open_result(path)
-    return xr.open_dataset(path, chunks={})
+    from .ncio import open_lazily
+
+    return open_lazily(path)
 
 
 def _own(previews, p: StagePlan) -> dict:

@@ -84,7 +84,9 @@ def stored_preview(path: Path) -> Preview:
     """The preview of a stored (fresh) result: its sizes and coordinate ranges, no data loaded."""
     import xarray as xr
 
-    with xr.open_dataset(path) as ds:
+    from . import ncio
+
+    with ncio.locked(), xr.open_dataset(path) as ds:
         return Preview.of(ds)
 
 

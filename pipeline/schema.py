@@ -37,7 +37,8 @@ MISSING = _Missing()
 #:   int, bool, str, choice, path (a file, resolved against the scene's folder)
 #:   paths     one or more files (a string or a list of strings), each resolved like ``path``
 #:   list      a list of strings; intlist: a list of whole numbers
-KINDS = ("quantity", "sweep", "quantities", "int", "bool", "str", "choice", "path", "paths", "list", "intlist")
+#:   table     a table of names to numbers or strings (e.g. { eta = 0.0 })
+KINDS = ("quantity", "sweep", "quantities", "int", "bool", "str", "choice", "path", "paths", "list", "intlist", "table")
 
 
 @dataclass(frozen=True)
@@ -134,6 +135,11 @@ class Param:
             for x in raw:
                 self._bounded(x, key)
             return tuple(raw)
+        if k == "table":
+            if not isinstance(raw, dict) or not all(isinstance(v, (int, float, str)) and not isinstance(v, bool)
+                                                    for v in raw.values()):
+                raise UserError(f"expected a table of names to numbers or strings, e.g. {{ eta = 0.0 }}, got {raw!r}", key=key)
+            return dict(raw)
         if k == "paths":
             items = [raw] if isinstance(raw, str) else raw
             if not isinstance(items, list) or not items or not all(isinstance(x, str) for x in items):

@@ -174,7 +174,7 @@ def _files(name: str) -> FileInput:
     def options(params):
         spec = params[name]
         return dict(key=name, convention=spec["convention"], columns=spec["columns"], q_unit=spec["q_unit"],
-                    value_unit=spec["C_unit"], variable=spec["variable"],
+                    value_unit=spec["C_unit"], variable=spec["variable"], select=spec["select"],
                     convention_units={k: unit for k, (unit, _) in CONVENTIONS.items()})
 
     return FileInput(f"{name}.path", reader="spectrum", options=options)

@@ -129,6 +129,8 @@ PSD_FILE_PARAMS = (
     Param("hurst", "quantity", "", default=0.5, lo=0.0, hi=1.0, lo_open=True,
           doc="Hurst exponent assumed by the '1d' (profile) conversion"),
     Param("variable", "str", default=None, doc="NetCDF: name of the PSD variable (default: the only one over q)"),
+    Param("select", "table", default=None,
+          doc="NetCDF: the slice of a PSD variable with more dimensions than q, e.g. { eta = 0.0 } for psd_combined"),
     Param("extend", "choice", default="none", choices=("none", "power_law", "zero"),
           doc="how to extend beyond the file's q range (none: error)"),
 )
