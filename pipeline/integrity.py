@@ -1,23 +1,24 @@
 """Checksums of stored results: an edited value or attribute is found when a result is reused.
 
-Each result file carries a global attribute ``data_checksum``: a sha256 over (a) one 64-bit
-sum per variable, the sum over its elements of a hash of (element index, value bits), and (b)
-every attribute of the file (global and per variable) except the checksum itself. The per-
-variable sums do not depend on the order in which blocks are added, so the engine sums the
-blocks it computes as it writes them (:class:`Checksums`), and only the variables written in
-one piece are read back (they are small).
+Each result file carries a global attribute ``data_checksum`` (JSON): the algorithm, the block
+shape each variable was hashed in, and a sha256 over (a) per variable, the sum modulo 2^256 of
+the sha256 of each block (its name, position and little-endian bytes), and (b) every attribute
+of the file (global and per variable) except the checksum itself. The block sums do not depend
+on the order of the blocks, so the engine hashes the blocks it computes as it writes them
+(:class:`Checksums`, the dask chunks) and reads back only the variables written in one piece.
 
-Detected: any changed value of any variable or coordinate (a flipped bit, an edited number,
-NaN for a number), a changed, added or removed attribute (``parameters`` with the stage key
-kept, units, ...), a renamed, added or removed variable. Not detected: a deliberate forgery
-that also recomputes the checksum with this module (it is a checksum, not a signature), or a
-file checked only by its key because it is larger than ``VERIFY_LIMIT_BYTES`` and ``--verify``
-was not asked for. Hashing runs at about the speed of reading the file (docs/reliability.md).
+Detected: any changed value of any variable or coordinate (a flipped bit, an edited number, NaN
+for a number), a changed, added or removed attribute (``parameters`` with the stage key kept,
+units, ...), a renamed, added or removed variable. Not detected: a deliberate forgery that
+recomputes the checksum with this module (a checksum is not a signature); and a file larger than
+:data:`VERIFY_LIMIT_BYTES` is checked only by its key unless ``--verify`` is asked for. Hashing
+runs at about the speed of reading the file (docs/reliability.md).
 """
 
 from __future__ import annotations
 
 import hashlib
+import itertools
 import json
 import math
 
@@ -27,62 +28,60 @@ from . import ncio
 
 #: the global attribute holding the checksum, and the name of the algorithm in its value
 ATTR = "data_checksum"
-ALGORITHM = "sum64-sha256-v1"
+ALGORITHM = "blocksum-sha256-v1"
 #: files up to this size are verified whenever they are reused; larger ones with --verify
 VERIFY_LIMIT_BYTES = 64 * 2**20
-
-_M1, _M2 = np.uint64(0xBF58476D1CE4E5B9), np.uint64(0x94D049BB133111EB)
-_CANONICAL_NAN = np.array([np.nan]).view(np.uint64)[0]
-
-
-def _mix(x: np.ndarray) -> np.ndarray:
-    """splitmix64's finaliser on uint64 arrays (wrapping arithmetic)."""
-    x = (x ^ (x >> np.uint64(30))) * _M1
-    x = (x ^ (x >> np.uint64(27))) * _M2
-    return x ^ (x >> np.uint64(31))
+#: elements per block when a variable is hashed by reading it back
+_BLOCK_ELEMENTS = 2**21
 
 
-def _bits(values: np.ndarray) -> np.ndarray:
-    """Each element as 64 bits: floats as float64 (one NaN), integers as int64, others hashed."""
-    kind = values.dtype.kind
-    if kind == "f":
-        a = np.ascontiguousarray(values, dtype=np.float64)
-        return np.where(np.isnan(a), _CANONICAL_NAN, a.view(np.uint64))
-    if kind in "iub":
-        return np.ascontiguousarray(values, dtype=np.int64).view(np.uint64)
-    flat = [int.from_bytes(hashlib.blake2b(str(v).encode(), digest_size=8).digest(), "little") for v in values.ravel()]
-    return np.array(flat, dtype=np.uint64).reshape(values.shape)
-
-
-def _salt(name: str) -> np.uint64:
-    return np.uint64(int.from_bytes(hashlib.blake2b(name.encode(), digest_size=8).digest(), "little"))
-
-
-def block_sum(name: str, values, start, shape) -> int:
-    """The contribution of one block (``values`` at offset ``start`` in a variable of ``shape``)."""
+def block_digest(name: str, values, start) -> int:
+    """sha256 of one block of variable ``name`` at offset ``start`` (as an integer)."""
     values = np.asarray(values)
-    if values.size == 0:
-        return 0
-    strides = [math.prod(shape[d + 1:]) for d in range(len(shape))]
-    index = np.zeros(values.shape, dtype=np.uint64)
-    for d, (s0, n, stride) in enumerate(zip(start, values.shape, strides)):
-        shape_d = [1] * values.ndim
-        shape_d[d] = n
-        index = index + (np.arange(s0, s0 + n, dtype=np.uint64) * np.uint64(stride)).reshape(shape_d)
-    with np.errstate(over="ignore"):
-        h = _mix(_bits(values) ^ _mix(index ^ _salt(name)))
-    return int(h.sum(dtype=np.uint64))
+    h = hashlib.sha256(f"{name}|{tuple(int(s) for s in start)}|{values.shape}|{values.dtype.kind}|".encode())
+    if values.dtype.kind in "fiub":
+        if values.dtype.byteorder == ">" or (values.dtype.byteorder == "=" and np.little_endian is False):
+            values = values.astype(values.dtype.newbyteorder("<"))
+        h.update(memoryview(np.ascontiguousarray(values)).cast("B"))
+    else:  # strings and objects: their text
+        h.update("\x1f".join(str(v) for v in values.ravel()).encode())
+    return int.from_bytes(h.digest(), "big")
+
+
+def _regular(chunks) -> tuple[int, ...] | None:
+    """The block shape of a dask chunking where every chunk but the last along each dim is equal."""
+    if any(any(c != cs[0] for c in cs[:-1]) or cs[-1] > cs[0] for cs in chunks):
+        return None
+    return tuple(int(cs[0]) for cs in chunks)
 
 
 class Checksums:
-    """Per-variable sums of blocks, added in any order (``add(name, block, start)``)."""
+    """Per-variable block sums of the dask variables written block by block (``add``), hashed in a
+    background thread (hashlib releases the GIL) while the next blocks are computed and written."""
 
-    def __init__(self, shapes: dict):
-        self.shapes = {str(k): tuple(int(n) for n in v) for k, v in shapes.items()}
-        self.sums = {name: 0 for name in self.shapes}
+    def __init__(self, chunks: dict):
+        self.blocks = {str(k): _regular(v) for k, v in chunks.items()}
+        self.pending: dict[str, list] = {name: [] for name, block in self.blocks.items() if block is not None}
+        self.pool = None
+        self.queue: list = []
 
     def add(self, name: str, values, start) -> None:
-        self.sums[name] = (self.sums[name] + block_sum(name, values, start, self.shapes[name])) % 2**64
+        if name in self.pending:
+            if self.pool is None:
+                from concurrent.futures import ThreadPoolExecutor
+
+                self.pool = ThreadPoolExecutor(1, thread_name_prefix="roughcontact-checksum")
+            self.pending[name].append(self.pool.submit(block_digest, name, values, tuple(start)))
+            self.queue.append(self.pending[name][-1])
+            while len(self.queue) > 4:  # at most a few blocks wait for their hash (bounded memory)
+                self.queue.pop(0).result()
+
+    def known(self) -> dict[str, tuple[tuple[int, ...], int]]:
+        """Block shape and block sum of each variable hashed while written (waits for the hashing)."""
+        out = {name: (self.blocks[name], sum(f.result() for f in futures) % 2**256) for name, futures in self.pending.items()}
+        if self.pool is not None:
+            self.pool.shutdown()
+        return out
 
 
 def _plain(value):
@@ -96,23 +95,24 @@ def _plain(value):
     return value
 
 
-def _variable_sum(var, name: str, rows: int = 2**21) -> int:
-    """The sum of a variable read from an open netCDF4 file, in slabs along its first dimension."""
+def _default_block(shape) -> tuple[int, ...]:
+    return (max(1, _BLOCK_ELEMENTS // max(1, math.prod(shape[1:]))),) + tuple(shape[1:]) if shape else ()
+
+
+def _variable_sum(var, name: str, block) -> int:
+    """The block sum of a variable read from an open netCDF4 file on the grid of ``block``."""
     shape = tuple(var.shape)
-    if not shape:
-        with ncio.locked():
-            return block_sum(name, np.asarray(var[...]), (), ())
-    step = max(1, rows // max(1, math.prod(shape[1:])))
     total = 0
-    for i in range(0, shape[0], step):
+    for start in itertools.product(*(range(0, n, b) for n, b in zip(shape, block))):
+        region = tuple(slice(s, s + b) for s, b in zip(start, block))
         with ncio.locked():
-            values = np.asarray(var[i:i + step])
-        total = (total + block_sum(name, values, (i,) + (0,) * (len(shape) - 1), shape)) % 2**64
+            values = np.asarray(var[region] if region else var[...])
+        total = (total + block_digest(name, values, start)) % 2**256
     return total
 
 
-def _digest(nc, known: dict[str, int]) -> str:
-    """The checksum of an open netCDF4 file; sums in ``known`` are taken as given."""
+def _digest(nc, blocks: dict, known: dict[str, int]) -> str:
+    """sha256 over the variables' block sums and all attributes of an open netCDF4 file."""
     h = hashlib.sha256(ALGORITHM.encode())
     with ncio.locked():
         nc.set_auto_maskandscale(False)
@@ -120,20 +120,27 @@ def _digest(nc, known: dict[str, int]) -> str:
         attrs = {"": {a: _plain(nc.getncattr(a)) for a in nc.ncattrs() if a != ATTR}}
         attrs.update({n: {a: _plain(nc.variables[n].getncattr(a)) for a in nc.variables[n].ncattrs()} for n in names})
     for name in names:
-        total = known[name] if name in known else _variable_sum(nc.variables[name], name)
-        h.update(f"{name}:{total:016x};".encode())
+        if name not in blocks:
+            return "variable not in the checksum: " + name
+        total = known[name] if name in known else _variable_sum(nc.variables[name], name, tuple(blocks[name]))
+        h.update(f"{name}:{tuple(blocks[name])}:{total:064x};".encode())
     h.update(json.dumps(attrs, sort_keys=True, default=str).encode())
-    return f"{ALGORITHM}:{h.hexdigest()}"
+    return h.hexdigest()
 
 
-def stamp(path, known: dict[str, int] | None = None) -> str:
-    """Compute the file's checksum (reading the variables whose sums are not ``known``) and
-    store it as the global attribute :data:`ATTR`."""
+def stamp(path, known: dict[str, tuple[tuple[int, ...], int]] | None = None) -> None:
+    """Compute the file's checksum (reading back the variables whose block sums are not
+    ``known``) and store it as the global attribute :data:`ATTR`."""
+    known = known or {}
     with ncio.dataset(path, "a") as nc:
-        value = _digest(nc, known or {})
+        with ncio.locked():
+            shapes = {name: tuple(v.shape) for name, v in nc.variables.items()}
+        blocks = {name: list(known[name][0]) if name in known else list(_default_block(shape))
+                  for name, shape in shapes.items()}
+        digest = _digest(nc, blocks, {name: total for name, (_, total) in known.items()})
+        value = json.dumps({"algorithm": ALGORITHM, "blocks": blocks, "sha256": digest}, separators=(",", ":"))
         with ncio.locked():
             nc.setncattr(ATTR, value)
-    return value
 
 
 def verify(path) -> bool | None:
@@ -143,4 +150,11 @@ def verify(path) -> bool | None:
             stored = nc.getncattr(ATTR) if ATTR in nc.ncattrs() else None
         if stored is None:
             return None
-        return _digest(nc, {}) == stored
+        try:
+            record = json.loads(stored)
+            blocks, expected = dict(record["blocks"]), record["sha256"]
+        except (ValueError, TypeError, KeyError):
+            return False
+        if record.get("algorithm") != ALGORITHM:
+            return None
+        return _digest(nc, blocks, {}) == expected

@@ -142,20 +142,20 @@ def write(ds: xr.Dataset, path: Path, compute_with="threads", progress_stream=No
         lazy = dask_variables(ds)
         with ncio.locked():
             ds.drop_vars(lazy).to_netcdf(tmp, engine="netcdf4")
-        sums = integrity.Checksums({name: ds[name].shape for name in lazy})
+        sums = integrity.Checksums({name: ds[name].variable.chunks for name in lazy})
         if lazy:
             _define(tmp, ds, lazy)
             write_blocks(tmp, ds, lazy, compute_with, progress_stream, checksums=sums)
-        integrity.stamp(tmp, sums.sums)
+        integrity.stamp(tmp, sums.known())
         with open(tmp, "rb+") as fh:
             os.fsync(fh.fileno())
         os.replace(tmp, path)
     except BaseException as exc:
+        why = _why(exc, path) if _is_write_failure(exc) else None  # the free space before the temporary goes
         if tmp is not None:
             Path(tmp).unlink(missing_ok=True)
-        if _is_write_failure(exc):
-            raise OutputError(f"cannot write this result ({_why(exc, path)}); nothing of it was kept",
-                              file=str(path)) from None
+        if why is not None:
+            raise OutputError(f"cannot write this result ({why}); nothing of it was kept", file=str(path)) from None
         raise
 
 
@@ -178,7 +178,7 @@ def _why(exc: BaseException, path: Path) -> str:
         free = shutil.disk_usage(path.parent if path.parent.exists() else Path.cwd()).free
     except OSError:
         return text
-    return f"{text}; {free / 1e6:.3g} MB free on its disk" if free < 2**30 else text
+    return f"{text}; the disk had {free / 1e6:.3g} MB free when it failed" if free < 2**30 else text
 
 
 def _define(path, ds: xr.Dataset, names: list[str]) -> None:
