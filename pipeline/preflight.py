@@ -113,11 +113,14 @@ def validate(plans, scenes: dict, outdir: Path) -> tuple[dict[int, dict], dict[t
             previews[here] = stored_preview(p.path)
             stored[here] = p.path.stat().st_size
             continue
-        files[i] = {param: read_input(p.stage, param, path, p.params) for param, path in p.file_paths.items()}
-        own = None
-        if p.stage.validate is not None:
+        try:
+            files[i] = {param: read_input(p.stage, param, path, p.params) for param, path in p.file_paths.items()}
             own = p.stage.validate(StageInput(params=p.params, upstream=upstream, files=files[i], wanted=p.wanted,
-                                              stage=p.stage.name))
+                                              stage=p.stage.name)) if p.stage.validate is not None else None
+        except UserError as exc:  # say which variant the bad value belongs to
+            if p.variant == "base":
+                raise
+            raise UserError(f"{exc.message} (variant {p.variant})", file=exc.file, key=exc.key) from None
         estimates.append(sizing.estimate(p, scenes[p.variant], dims, own, upstream, in_flight, lazy))
         stored[here] = estimates[-1].result
         own = own if own is not None else Preview()

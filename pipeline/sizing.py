@@ -165,6 +165,7 @@ def estimate(plan, scene, spanned: dict[str, int], own, upstream: dict, in_fligh
         result = int(st.result_bytes(plan.params, plan.wanted, sizes))
     else:
         result = VALUE_BYTES * max(n_vars, 1) * math.prod(sizes.values())
+    result += VALUE_BYTES * (sum(sizes.values()) + n_vars)  # the coordinates, and scalars
     hooks_upstream = {**upstream, **({st.name: own} if own is not None else {})}
     if st.point_bytes is not None:
         per_point = int(st.point_bytes(plan.params, plan.wanted, hooks_upstream))

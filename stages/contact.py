@@ -61,7 +61,7 @@ def validate_contact(inp: StageInput) -> Preview:
 
 def _result_bytes(params, wanted, sizes) -> int:
     """G over everything but p; A/A0 (and the mass of P) over everything but the stress grid; P and
-    sigma over everything."""
+    sigma over everything (the engine adds the coordinates)."""
     full = int(np.prod(list(sizes.values()), dtype=float))
     area = full // sizes.get("stress_level", 1)
     stress = 2 * full + area if "stress_distribution" in wanted else 0
