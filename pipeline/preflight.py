@@ -90,10 +90,29 @@ def stored_preview(path: Path) -> Preview:
         return Preview.of(ds)
 
 
+@contextlib.contextmanager
+def _in_variant(variant: str) -> Iterator[None]:
+    """Say which variant a bad value belongs to."""
+    try:
+        yield
+    except UserError as exc:
+        if variant == "base":
+            raise
+        raise UserError(f"{exc.message} (variant {variant})", file=exc.file, key=exc.key) from None
+
+
 def validate(plans, scenes: dict, outdir: Path) -> tuple[dict[int, dict], dict[tuple[str, str], Preview]]:
-    """Read the input files and run the validate hooks of every stage about to compute, then check
-    the sizes. Returns the loaded files per plan index and the previews per (variant, stage)."""
+    """Read the input files and run the checks of every stage about to compute: first each stage's
+    ``check`` (its own keys and files: the cause), then each ``validate`` with the previews of its
+    upstream results (what follows from them), upstream first; then check the sizes. Returns the
+    loaded files per plan index and the previews per (variant, stage)."""
     files: dict[int, dict] = {}
+    for i, p in enumerate(plans):
+        if p.status != "fresh":
+            with _in_variant(p.variant):
+                files[i] = {param: read_input(p.stage, param, path, p.params) for param, path in p.file_paths.items()}
+                if p.stage.check is not None:
+                    p.stage.check(StageInput(params=p.params, files=files[i], wanted=p.wanted, stage=p.stage.name))
     previews: dict[tuple[str, str], Preview] = {}
     spanned: dict[tuple[str, str], dict[str, int]] = {}
     stored: dict[tuple[str, str], int] = {}  # bytes of each result, estimated or on disk
@@ -113,14 +132,9 @@ def validate(plans, scenes: dict, outdir: Path) -> tuple[dict[int, dict], dict[t
             previews[here] = stored_preview(p.path)
             stored[here] = p.path.stat().st_size
             continue
-        try:
-            files[i] = {param: read_input(p.stage, param, path, p.params) for param, path in p.file_paths.items()}
+        with _in_variant(p.variant):
             own = p.stage.validate(StageInput(params=p.params, upstream=upstream, files=files[i], wanted=p.wanted,
                                               stage=p.stage.name)) if p.stage.validate is not None else None
-        except UserError as exc:  # say which variant the bad value belongs to
-            if p.variant == "base":
-                raise
-            raise UserError(f"{exc.message} (variant {p.variant})", file=exc.file, key=exc.key) from None
         estimates.append(sizing.estimate(p, scenes[p.variant], dims, own, upstream, in_flight, lazy))
         stored[here] = estimates[-1].result
         own = own if own is not None else Preview()

@@ -117,6 +117,10 @@ class Stage:
     #: parameters, the optional outputs asked for and the upstream results (lazy or small);
     #: the engine sizes chunks with it (default 512)
     point_bytes: Callable[[Mapping[str, Any], frozenset, Mapping[str, xr.Dataset]], int] | None = None
+    #: optional ``check(StageInput) -> None``: checks of the stage's own scene keys and files alone
+    #: (``inp.upstream`` is empty); the engine runs every stage's check before any stage's validate, so
+    #: that a cause (two maps on different grids) is reported before its consequences downstream
+    check: Callable[["StageInput"], None] | None = None
     #: optional ``validate(StageInput) -> Preview | None``: every check that can fail on the user's
     #: input (scene keys, a file's contents, a missing optional package), without computing; the engine
     #: runs it for every stage about to compute, upstream first, before any of them computes, so a bad
@@ -156,19 +160,23 @@ class Preview:
     #: the scene key that sets the size of each dimension the stage adds (e.g. {"q":
     #: "numerics.points_per_decade"}), named when a result would be too large for the machine
     keys: Mapping[str, str] = field(default_factory=dict)
+    #: the values of (small) 1-D coordinates, where known in advance (e.g. the magnifications)
+    coords: Mapping[str, np.ndarray] = field(default_factory=dict)
 
     @classmethod
     def of(cls, ds: xr.Dataset, small: int = 10**6) -> "Preview":
         """The preview of a stored result (its coordinates and small 1-D variables are read)."""
-        ranges = {}
+        ranges, coords = {}, {}
         for name, var in ds.variables.items():
             if var.ndim == 1 and var.size <= small and var.dtype.kind in "fiu":
                 values = np.asarray(var.values, dtype=float)
                 finite = values[np.isfinite(values)]
                 if finite.size:
                     ranges[str(name)] = (float(finite.min()), float(finite.max()))
+                if name in ds.coords and var.dims == (name,):
+                    coords[str(name)] = values
         return cls(sizes={str(k): int(v) for k, v in ds.sizes.items()}, ranges=ranges,
-                   variables=frozenset(str(v) for v in ds.data_vars), attrs=dict(ds.attrs))
+                   variables=frozenset(str(v) for v in ds.data_vars), attrs=dict(ds.attrs), coords=coords)
 
 
 @dataclass

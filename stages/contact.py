@@ -7,6 +7,8 @@ Kernels: :mod:`roughcontact.physics.contact` (seed eqs 16-19, 53). Figures:
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import xarray as xr
 
@@ -14,7 +16,7 @@ from roughcontact.physics.contact import contact_area_ratio, persson_G, stress_d
 from roughcontact.stage import Figure, Param, Preview, Stage, StageInput, Var, register, register_params
 
 from .figures.contact import figure_contact_area, figure_stress_distribution
-from .shared import E_STAR, MATERIAL_KEYS, e_star, zeta_count, zeta_key, zeta_values
+from .shared import E_STAR, MATERIAL_KEYS, e_star, zeta_preview, zeta_values
 
 register_params(
     "numerics",
@@ -53,10 +55,11 @@ def compute_contact(inp: StageInput) -> xr.Dataset:
 def validate_contact(inp: StageInput) -> Preview:
     """Before anything computes: the magnifications asked for lie on the psd stage's q grid;
     returns the sizes of the dimensions the stage adds (zeta, and the stress grid)."""
-    sizes = {"zeta": zeta_count(inp, inp.upstream["psd"])}
-    if "stress_distribution" in inp.wanted:
-        sizes["stress_level"] = inp["numerics.sigma_points"]
-    return Preview(sizes=sizes, keys={"stress_level": "numerics.sigma_points", "zeta": zeta_key(inp)})
+    zeta = zeta_preview(inp, inp.upstream["psd"])
+    if "stress_distribution" not in inp.wanted:
+        return zeta
+    return dataclasses.replace(zeta, sizes={**zeta.sizes, "stress_level": inp["numerics.sigma_points"]},
+                               keys={**zeta.keys, "stress_level": "numerics.sigma_points"})
 
 
 def _result_bytes(params, wanted, sizes) -> int:

@@ -106,8 +106,9 @@ def validate_psd(inp: StageInput) -> Preview:
         why = topography.attrs.get("pairing", "") if topography is not None else ""
         raise UserError("eta = 'measured' needs both surfaces of kind 'topography', paired on the same grid"
                         + (f" ({why})" if why else ""), key="interface.eta")
-    return Preview(sizes={"q": log_grid_size(lo, hi, inp["numerics.points_per_decade"], knots)}, ranges={"q": (lo, hi)},
-                   keys={"q": "numerics.points_per_decade"})
+    size = log_grid_size(lo, hi, inp["numerics.points_per_decade"], knots)
+    grid = {"q": log_grid(lo, hi, inp["numerics.points_per_decade"], knots)} if size <= 10**6 else {}
+    return Preview(sizes={"q": size}, ranges={"q": (lo, hi)}, keys={"q": "numerics.points_per_decade"}, coords=grid)
 
 
 def compute_psd(inp: StageInput) -> xr.Dataset:

@@ -36,7 +36,7 @@ from roughcontact.stage import (
 )
 
 from .figures.separation import figure_separation
-from .shared import E_STAR, MATERIAL_KEYS, e_star, zeta_count, zeta_key, zeta_values
+from .shared import E_STAR, MATERIAL_KEYS, e_star, zeta_preview, zeta_values
 
 register_section(
     Section(
@@ -78,7 +78,7 @@ def _checked_alpha(inp: StageInput) -> float:
 
 def validate_separation(inp: StageInput) -> Preview:
     """Before anything computes: the magnifications lie on the psd stage's q grid."""
-    return Preview(sizes={"zeta": zeta_count(inp, inp.upstream["psd"])}, keys={"zeta": zeta_key(inp)})
+    return zeta_preview(inp, inp.upstream["psd"])
 
 
 def compute_separation(inp: StageInput) -> xr.Dataset:

@@ -14,7 +14,7 @@ import numpy as np
 
 from roughcontact.physics.contact import effective_modulus
 from roughcontact.physics.spectra import CONVENTIONS
-from roughcontact.stage import Param, Section, UserError, Var, register_coords, register_params, register_section
+from roughcontact.stage import Param, Preview, Section, UserError, Var, register_coords, register_params, register_section
 
 # ----------------------------------------------------------------------------------------
 # Coordinates written by several stages
@@ -60,21 +60,18 @@ def _check_zeta(zeta: np.ndarray, top: float) -> None:
         raise UserError(f"magnification {zeta.max():g} beyond the q grid (zeta <= q_max/qL = {top:.6g})", key="contact.zeta")
 
 
-def zeta_key(inp) -> str:
-    """The scene key that sets the number of magnifications (for messages about sizes)."""
-    return "numerics.points_per_decade" if isinstance(inp["contact.zeta"], str) else "contact.zeta"
-
-
-def zeta_count(inp, psd) -> int:
-    """Before anything computes: how many magnifications ``[contact] zeta`` asks for, checked
-    against the q grid of the psd stage's ``psd`` preview (its size and range)."""
+def zeta_preview(inp, psd) -> Preview:
+    """Before anything computes: the magnifications ``[contact] zeta`` asks for (their number, and
+    their values where known), checked against the q grid of the psd stage's ``psd`` preview."""
     zeta = inp["contact.zeta"]
     if isinstance(zeta, str):
-        return int(psd.sizes["q"])
+        q = psd.coords.get("q")
+        return Preview(sizes={"zeta": int(psd.sizes["q"])}, coords={"zeta": q / q[0]} if q is not None else {},
+                       keys={"zeta": "numerics.points_per_decade"})
     zeta = np.atleast_1d(np.asarray(zeta, dtype=float))
     lo, hi = psd.ranges["q"]
     _check_zeta(zeta, hi / lo)
-    return int(zeta.size)
+    return Preview(sizes={"zeta": int(zeta.size)}, coords={"zeta": zeta}, keys={"zeta": "contact.zeta"})
 
 
 # ----------------------------------------------------------------------------------------

@@ -105,6 +105,20 @@ def test_user_errors_are_found_before_any_result_is_written(tmp_path, no_writes,
     assert _nothing_under(tmp_path / "out")
 
 
+@pytest.mark.parametrize("change, match", [
+    (dict(contact={"zeta": [4.0]}), "add 64 to contact.zeta"),
+    (dict(substrate={"hrms": ["1 nm", "2 nm"]}), "does not sweep hrms_substrate"),
+])
+def test_bem_errors_are_found_before_any_result_is_written(tmp_path, no_writes, change, match):
+    pytest.importorskip("tamaas")
+    raw = scenes.load("bem").raw
+    for section, values in change.items():
+        raw[section] = {**raw[section], **values}
+    with pytest.raises(UserError, match=match):
+        engine.run(scenes.from_dict(raw), tmp_path / "out", report=engine.Reporter(None))
+    assert _nothing_under(tmp_path / "out")
+
+
 def test_the_flat_map_error_names_the_map_on_the_command_line(tmp_path, capsys, write_scene):
     path = write_scene(make_scene(substrate=_flat_map(tmp_path, tilted=False), solid=None, numerics=SMALL,
                                   outputs={"variables": ["psd_combined"]}))
