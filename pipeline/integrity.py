@@ -64,6 +64,7 @@ class Checksums:
         self.pending: dict[str, list] = {name: [] for name, block in self.blocks.items() if block is not None}
         self.pool = None
         self.queue: list = []
+        self.waited = 0.0  # seconds the writer waited for the hashing (its cost on the critical path)
 
     def add(self, name: str, values, start) -> None:
         if name in self.pending:
@@ -74,11 +75,19 @@ class Checksums:
             self.pending[name].append(self.pool.submit(block_digest, name, values, tuple(start)))
             self.queue.append(self.pending[name][-1])
             while len(self.queue) > 4:  # at most a few blocks wait for their hash (bounded memory)
-                self.queue.pop(0).result()
+                self._wait(self.queue.pop(0))
+
+    def _wait(self, future) -> int:
+        import time
+
+        t0 = time.perf_counter()
+        value = future.result()
+        self.waited += time.perf_counter() - t0
+        return value
 
     def known(self) -> dict[str, tuple[tuple[int, ...], int]]:
         """Block shape and block sum of each variable hashed while written (waits for the hashing)."""
-        out = {name: (self.blocks[name], sum(f.result() for f in futures) % 2**256) for name, futures in self.pending.items()}
+        out = {name: (self.blocks[name], sum(self._wait(f) for f in futures) % 2**256) for name, futures in self.pending.items()}
         if self.pool is not None:
             self.pool.shutdown()
         return out
