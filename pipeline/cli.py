@@ -12,7 +12,7 @@ import traceback
 from pathlib import Path
 
 from . import __version__, engine, scene as scenes, store
-from .errors import ComputationError, UserError
+from .errors import ComputationError, OutputError, UserError
 from .stage import stages
 
 
@@ -132,9 +132,15 @@ def _plot(sc, outdir: Path, reporter, scheduler=None) -> int:
         fig = f.make(results)
         target = folder / f"{f.name}.png"
         tmp = folder / f"{store.TMP_PREFIX}{f.name}.png"
-        fig.savefig(tmp, dpi=130)
-        plt.close(fig)
-        tmp.replace(target)
+        try:
+            fig.savefig(tmp, dpi=130)
+            tmp.replace(target)
+        except OSError as exc:  # a full disk, say: name the figure, keep nothing of it
+            tmp.unlink(missing_ok=True)
+            raise OutputError(f"cannot write this figure ({exc.strerror or exc}); nothing of it was kept",
+                              file=str(target)) from None
+        finally:
+            plt.close(fig)
         print(f"{f.title}: {target}")
     return 0
 

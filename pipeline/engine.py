@@ -15,7 +15,7 @@ from typing import Iterable, TextIO
 
 import xarray as xr
 
-from . import preflight, store
+from . import integrity, preflight, store
 from .errors import UserError
 from .schema import MISSING
 from .scene import Scene
@@ -81,7 +81,7 @@ def plan(scene: Scene, outdir: Path, targets: Iterable[str] | None = None, force
     A stored result with the right key is fresh if its data still match their checksum
     (:mod:`roughcontact.integrity`), checked for files up to ``integrity.VERIFY_LIMIT_BYTES``
     (``verify`` None), for every file (True) or for none (False)."""
-    scene, outdir, targets, force = _arguments(scene, outdir, targets, force)
+    scene, outdir, targets, force = preflight.arguments(scene, outdir, targets, force)
     targets = tuple(targets) if targets is not None else scene.outputs
     unknown = force - set(stages()) - {"all"}
     if unknown:
@@ -96,48 +96,12 @@ def plan(scene: Scene, outdir: Path, targets: Iterable[str] | None = None, force
     return plans
 
 
-def _arguments(scene, outdir, targets, force):
-    """The Python API's arguments made what the engine expects, or a clear error: a scene file,
-    built-in name or dict for a Scene, a string for a path, one name for a list of them."""
-    from . import scene as scenes
-
-    if isinstance(scene, (str, Path)):
-        scene = scenes.load(scene)
-    elif isinstance(scene, dict):
-        scene = scenes.from_dict(scene)
-    elif not isinstance(scene, Scene):
-        raise TypeError(f"expected a Scene (or a scene file, built-in name or dict), got {type(scene).__name__}")
-    if not isinstance(outdir, (str, Path)) or not str(outdir):
-        raise TypeError(f"outdir must be a folder path (str or pathlib.Path), got {outdir!r}")
-    if isinstance(targets, str):
-        targets = (targets,)
-    force = {force} if isinstance(force, str) else set(force or ())
-    if not all(isinstance(f, str) for f in force) or (targets is not None and not all(isinstance(t, str) for t in targets)):
-        raise TypeError("force and targets take stage or variable names (a string or a list of strings)")
-    return scene, Path(outdir), targets, force
-
-
 def _sha256(path: Path, param: str) -> str:
     """sha256 of an input file; an unreadable file is the user's error, naming the file and key."""
     try:
         return store.file_sha256(path)
     except OSError as exc:
         raise UserError(f"cannot read: {exc.strerror or exc}", file=str(path), key=param) from None
-
-
-def _damaged(path: Path, verify: bool | None) -> str | None:
-    """Why a stored result whose key matches cannot be trusted (its checksum), or None."""
-    from . import integrity
-
-    if verify is False or verify is None and path.stat().st_size > integrity.VERIFY_LIMIT_BYTES:
-        return None
-    try:
-        ok = integrity.verify(path)
-    except (OSError, RuntimeError, ValueError):
-        ok = False
-    if ok is None:
-        return "stored without a checksum (by an older roughcontact)"
-    return None if ok else "stored data or attributes differ from their checksum (edited or damaged since written)"
 
 
 def _plan_stage(scene, variant, st, outdir, keys, targets, force, verify=None) -> StagePlan:
@@ -175,7 +139,7 @@ def _plan_stage(scene, variant, st, outdir, keys, targets, force, verify=None) -
     if stored is None:
         status, reasons = "missing", ["no result yet" if not path.exists() else "existing file is unreadable"]
     elif stored.get("stage_key") == key and st.name not in force and "all" not in force:
-        damage = _damaged(path, verify)
+        damage = integrity.damage(path, verify)
         status, reasons = ("stale", [damage]) if damage else ("fresh", [])
     else:
         status = "stale"
@@ -292,7 +256,7 @@ def run(scene: Scene, outdir: Path, targets: Iterable[str] | None = None, force:
     """
     from .compute import scheduler as open_scheduler
 
-    scene, outdir, targets, force = _arguments(scene, outdir, targets, force)
+    scene, outdir, targets, force = preflight.arguments(scene, outdir, targets, force)
     report = report or Reporter()
     outdir = preflight.output_folder(outdir)
     with preflight.locked(outdir, report, lock_timeout), open_scheduler(scheduler or scene.get("run.scheduler")) as compute_with:

@@ -21,6 +21,7 @@ import hashlib
 import itertools
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 
@@ -167,3 +168,17 @@ def verify(path) -> bool | None:
         if record.get("algorithm") != ALGORITHM:
             return None
         return _digest(nc, blocks, {}) == expected
+
+
+def damage(path: Path, check: bool | None = None) -> str | None:
+    """Why a stored result whose key matches cannot be trusted (its checksum), or None. ``check``
+    None: files up to :data:`VERIFY_LIMIT_BYTES` are verified; True: every file; False: none."""
+    if check is False or check is None and Path(path).stat().st_size > VERIFY_LIMIT_BYTES:
+        return None
+    try:
+        ok = verify(path)
+    except (OSError, RuntimeError, ValueError):
+        ok = False
+    if ok is None:
+        return "stored without a checksum (by an older roughcontact)"
+    return None if ok else "stored data or attributes differ from their checksum (edited or damaged since written)"

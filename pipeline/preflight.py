@@ -31,6 +31,27 @@ LOCK_NAME = ".roughcontact.lock"
 LOAD_LIMIT_BYTES = 256 * 2**20
 
 
+def arguments(scene, outdir, targets, force):
+    """The Python API's arguments made what the engine expects, or a clear error: a scene file,
+    built-in name or dict for a Scene, a string for a path, one name for a list of them."""
+    from . import scene as scenes
+
+    if isinstance(scene, (str, Path)):
+        scene = scenes.load(scene)
+    elif isinstance(scene, dict):
+        scene = scenes.from_dict(scene)
+    elif not isinstance(scene, scenes.Scene):
+        raise TypeError(f"expected a Scene (or a scene file, built-in name or dict), got {type(scene).__name__}")
+    if not isinstance(outdir, (str, Path)) or not str(outdir):
+        raise TypeError(f"outdir must be a folder path (str or pathlib.Path), got {outdir!r}")
+    if isinstance(targets, str):
+        targets = (targets,)
+    force = {force} if isinstance(force, str) else set(force or ())
+    if not all(isinstance(f, str) for f in force) or (targets is not None and not all(isinstance(t, str) for t in targets)):
+        raise TypeError("force and targets take stage or variable names (a string or a list of strings)")
+    return scene, Path(outdir), targets, force
+
+
 def output_folder(outdir) -> Path:
     """The output folder, created if needed; a UserError naming it if it cannot be used."""
     outdir = Path(outdir)
