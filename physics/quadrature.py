@@ -122,6 +122,22 @@ def loglog_interp(xq, x, y):
     return _loglog_between(x[i], x[i + 1], y[..., i], y[..., i + 1], xq)
 
 
+def _log_pieces(lo: float, hi: float, points_per_decade: int, knots=()):
+    """The knots of :func:`log_grid` (lo, hi and the knots between) and the nodes per piece."""
+    if not (0 < lo < hi):
+        raise ValueError("log_grid needs 0 < lo < hi")
+    if points_per_decade < 1:
+        raise ValueError("points_per_decade must be >= 1")
+    edges = np.unique(np.concatenate([[lo, hi], [k for k in knots if lo < k < hi]]))
+    counts = [max(1, int(np.ceil(np.log10(b / a) * points_per_decade - 1e-9))) for a, b in zip(edges[:-1], edges[1:])]
+    return edges, counts
+
+
+def log_grid_size(lo: float, hi: float, points_per_decade: int, knots=()) -> int:
+    """The number of nodes :func:`log_grid` gives for these arguments, without building it."""
+    return int(sum(_log_pieces(lo, hi, points_per_decade, knots)[1])) + 1
+
+
 def log_grid(lo: float, hi: float, points_per_decade: int, knots=()) -> np.ndarray:
     """Geometric grid from ``lo`` to ``hi`` with about ``points_per_decade`` nodes per decade.
 
@@ -129,15 +145,8 @@ def log_grid(lo: float, hi: float, points_per_decade: int, knots=()) -> np.ndarr
     piece between consecutive knots, each piece geometric with the spacing closest to the
     requested one. Exact power-law quadrature then needs no node to straddle a kink.
     """
-    if not (0 < lo < hi):
-        raise ValueError("log_grid needs 0 < lo < hi")
-    if points_per_decade < 1:
-        raise ValueError("points_per_decade must be >= 1")
-    edges = np.unique(np.concatenate([[lo, hi], [k for k in knots if lo < k < hi]]))
-    pieces = []
-    for a, b in zip(edges[:-1], edges[1:]):
-        n = max(1, int(np.ceil(np.log10(b / a) * points_per_decade - 1e-9)))
-        pieces.append(np.geomspace(a, b, n + 1)[:-1])
+    edges, counts = _log_pieces(lo, hi, points_per_decade, knots)
+    pieces = [np.geomspace(a, b, n + 1)[:-1] for a, b, n in zip(edges[:-1], edges[1:], counts)]
     pieces.append([hi])
     return np.concatenate(pieces)
 

@@ -64,7 +64,7 @@ _COMMON = (
     Param("shift", "choice", default="none", choices=("none", "wlf", "table"),
           doc="horizontal temperature shift a_T: none, WLF (C1, C2) or a table"),
     Param("C1", "quantity", "", default=17.44, lo=0.0, lo_open=True, doc="WLF C1 (universal 17.44 about Tg)"),
-    Param("C2", "quantity", "K", default=51.6, lo=0.0, lo_open=True,
+    Param("C2", "quantity", "K", default=51.6, lo=0.0, lo_open=True, difference=True,
           doc="WLF C2, a temperature difference in K (universal 51.6 K about Tg)"),
     Param("shift_T", "quantities", "K", default=None, lo=0.0, lo_open=True, doc="shift table: temperatures"),
     Param("shift_log10_aT", "quantities", "", default=None, doc="shift table: log10 a_T at shift_T"),
