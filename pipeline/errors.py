@@ -43,6 +43,17 @@ class ComputationError(Exception):
     exit_code = 1
 
 
+class OutputError(UserError):
+    """A result could not be written (full disk, read-only folder, a folder where a file should
+    be, ...). One line naming the file; the CLI exits 1 (the scene is fine, the machine is not).
+    Raised only after the temporary file is removed: nothing of that result is kept."""
+
+    exit_code = 1
+
+    def located(self, *, file: str | None = None, key: str | None = None) -> "OutputError":
+        return OutputError(self.message, file=self.file or file, key=self.key or key)
+
+
 class SceneWarning(UserWarning):
     """The scene is valid but asks for something that is probably not what the user meant (a
     rough surface whose roughness no requested magnification reaches, ...). The message names

@@ -24,6 +24,7 @@ from roughcontact.physics.separation import (
 from roughcontact.stage import (
     Figure,
     Param,
+    Preview,
     Section,
     Stage,
     StageInput,
@@ -35,7 +36,7 @@ from roughcontact.stage import (
 )
 
 from .figures.separation import figure_separation
-from .shared import E_STAR, MATERIAL_KEYS, Q_REFERENCE, check_magnifications, check_measured_scope, e_star, zeta_values
+from .shared import E_STAR, MATERIAL_KEYS, Q_REFERENCE, e_star, zeta_preview, zeta_values
 
 register_section(
     Section(
@@ -75,9 +76,13 @@ def _checked_alpha(inp: StageInput) -> float:
     return alpha
 
 
+def validate_separation(inp: StageInput) -> Preview:
+    """Before anything computes: the magnifications lie on the psd stage's q grid."""
+    return zeta_preview(inp, inp.upstream["psd"])
+
+
 def compute_separation(inp: StageInput) -> xr.Dataset:
     psd = inp.upstream["psd"]
-    check_measured_scope(inp, psd)
     q = psd["q"].values
     E_star = e_star(inp)
     alpha = _checked_alpha(inp)
@@ -149,6 +154,8 @@ register(
         name="separation",
         version="2",
         compute=compute_separation,
+        validate=validate_separation,
+        unchunked=("zeta",),
         requires=("psd",),
         params=(*MATERIAL_KEYS, "load.p", "contact.zeta", "separation.alpha", "separation.refinement", *_NUMERICS),
         outputs={
@@ -158,7 +165,6 @@ register(
             "E_star": E_STAR,
             "qL": Q_REFERENCE,
         },
-        validate=check_magnifications,
         figures=(Figure("fig5_separation", "log10(p/E*) against u (seed Fig. 5)", ("separation",), figure_separation),),
         doc="Mean interfacial separation u(p, zeta, eta) (eq 57) and its small-pressure law u0, beta (eqs 59-60).",
         main_outputs=("mean_separation",),

@@ -10,6 +10,7 @@ coherence eta), ``[material]`` (the elastic solid), ``[load]`` (the nominal pres
 
 from __future__ import annotations
 
+import json
 import warnings
 from typing import NamedTuple
 
@@ -17,7 +18,7 @@ import numpy as np
 
 from roughcontact.physics.contact import effective_modulus
 from roughcontact.physics.spectra import CONVENTIONS
-from roughcontact.stage import (Param, SceneWarning, Section, UserError, Var, readable, register_coords,
+from roughcontact.stage import (Param, Preview, SceneWarning, Section, UserError, Var, readable, register_coords,
                                 register_params, register_section)
 
 # ----------------------------------------------------------------------------------------
@@ -59,10 +60,28 @@ def zeta_values(inp, q: np.ndarray) -> np.ndarray:
     if isinstance(zeta, str):
         return q / q[0]
     zeta = np.atleast_1d(np.asarray(zeta, dtype=float))
-    top = q[-1] / q[0]
+    _check_zeta(zeta, q[-1] / q[0])
+    return zeta
+
+
+def _check_zeta(zeta: np.ndarray, top: float) -> None:
     if np.any(zeta > top * (1 + 1e-12)):
         raise UserError(f"magnification {zeta.max():g} beyond the q grid (zeta <= q_max/qL = {top:.6g})", key="contact.zeta")
-    return zeta
+
+
+def zeta_preview(inp, psd) -> Preview:
+    """Before anything computes: the magnifications ``[contact] zeta`` asks for (their number, and
+    their values where known), checked against the q grid of the psd stage's ``psd`` preview."""
+    zeta = inp["contact.zeta"]
+    if isinstance(zeta, str):
+        q = psd.coords.get("q")
+        return Preview(sizes={"zeta": int(psd.sizes["q"])}, coords={"zeta": q / q[0]} if q is not None else {},
+                       keys={"zeta": "numerics.points_per_decade"})
+    zeta = np.atleast_1d(np.asarray(zeta, dtype=float))
+    lo, hi = psd.ranges["q"]
+    _check_zeta(zeta, hi / lo)
+    check_magnifications(zeta, psd)
+    return Preview(sizes={"zeta": int(zeta.size)}, coords={"zeta": zeta}, keys={"zeta": "contact.zeta"})
 
 
 # ----------------------------------------------------------------------------------------
@@ -85,9 +104,8 @@ class Band(NamedTuple):
 def surface_bands(psd, topography=None) -> dict[str, Band]:
     """The :class:`Band` of each rough surface (the measured range for a measured PSD).
 
-    ``psd`` is the psd stage's StageInput (its surface sections and files, SI). A measured map's
-    band is known only once the topography stage has run: pass its result as ``topography``;
-    without it such surfaces are left out."""
+    ``psd`` is the psd stage's StageInput (its surface sections and files, SI); ``topography``
+    the Preview of the topography stage's result, for measured maps (left out without it)."""
     bands = {}
     for name in SURFACES:
         spec = psd[name]
@@ -98,10 +116,9 @@ def surface_bands(psd, topography=None) -> dict[str, Band]:
         elif spec["kind"] == "psd_file":
             q = psd.files[f"{name}.path"].q
             bands[name] = Band(float(q[0]), float(q[-1]), f"{name}.path", spec["extend"] == "power_law")
-        elif topography is not None:
-            measured = np.isfinite(topography[f"psd_{name}_measured"].values)
-            q = topography[f"q_{name}_measured"].values[measured]
-            bands[name] = Band(float(np.min(q)), float(np.max(q)), f"{name}.files")
+        elif topography is not None and f"q_{name}_measured" in topography.ranges:
+            lo, hi = topography.ranges[f"q_{name}_measured"]
+            bands[name] = Band(float(lo), float(hi), f"{name}.files", spec["extend"] == "power_law")
     return bands
 
 
@@ -121,40 +138,28 @@ def _wavenumber(q: float) -> str:
     return readable(q, "1/m").removesuffix(" 1/m")
 
 
-def reference_note(psd) -> str:
-    """What zeta is measured against, for ``plan`` and ``run`` (``psd``: the psd stage's StageInput)."""
-    qL, source = reference_wavenumber(psd, surface_bands(psd))
-    if qL is None:
-        return "zeta = q/qL with qL = the lowest wavenumber measured on the maps (known after the topography stage)"
-    return f"zeta = q/qL with qL = {_wavenumber(qL)} 1/m ({source}; grid.q_min sets another system size)"
+def scope_attrs(psd, topography, lo: float) -> dict:
+    """What the psd stage tells the stages over zeta before they compute (its Preview's and its
+    result's attributes): the reference of zeta as a note for the user, each rough surface's band
+    (JSON), how the coherence enters and how many surfaces are rough. ``lo``: the grid's qL."""
+    bands = surface_bands(psd, topography)
+    source = reference_wavenumber(psd, bands)[1]
+    eta, n_rough = psd["interface.eta"], sum(is_rough(psd[n]) for n in SURFACES)
+    coherence = "measured" if isinstance(eta, str) else "swept" if np.size(eta) > 1 else "constant"
+    return {"note": f"zeta = q/qL with qL = {_wavenumber(lo)} 1/m ({source}; grid.q_min sets another system size)",
+            "surface_bands": json.dumps({n: list(b) for n, b in bands.items()}), "q_reference_source": source,
+            "coherence": coherence if n_rough == 2 else "none", "rough_surfaces": n_rough}
 
 
-def check_magnifications(inp) -> None:
-    """``validate`` hook of the stages that read ``contact.zeta``: a rough surface whose whole band
-    lies outside the magnifications asked for is an error when nothing rough is left or when a
-    coherence is swept or measured (it could change nothing), a SceneWarning otherwise."""
-    psd = inp.upstream["psd"]
-    bands = surface_bands(psd)
-    qL, source = reference_wavenumber(psd, bands)
-    if qL is not None:
-        eta = psd["interface.eta"]
-        scope_check(bands, qL, source, inp["contact.zeta"], isinstance(eta, str) or np.size(eta) > 1,
-                    n_rough=sum(is_rough(psd[n]) for n in SURFACES))
-
-
-def check_measured_scope(inp, psd) -> None:
-    """The same check when the stage computes, for measured maps (their band is known only once
-    the topography stage has run); ``psd`` is the psd stage's result."""
-    q, bands, n_rough = psd["q"].values, {}, 0
-    for name in SURFACES:
-        da = psd[f"psd_{name}"]
-        n_rough += da.attrs.get("surface") != "smooth"
-        if da.attrs.get("surface") == "measured topography":
-            rough = np.flatnonzero(np.any(da.values.reshape(-1, q.size) > 0, axis=0))
-            bands[name] = Band(q[rough[0]], q[rough[-1]], f"{name}.files") if rough.size else Band(np.inf, np.inf, f"{name}.files")
-    if bands:
-        scope_check(bands, q[0], "the lowest wavenumber of the maps", inp["contact.zeta"],
-                    psd["psd_combined"].attrs.get("coherence") in ("measured", "swept"), n_rough)
+def check_magnifications(zeta: np.ndarray, psd) -> None:
+    """A rough surface whose whole band lies outside the magnifications asked for (``psd``: the
+    psd stage's Preview) is an error when nothing rough is left or when a coherence is swept or
+    measured (it could change nothing), a SceneWarning otherwise; the message names the keys."""
+    if "surface_bands" not in psd.attrs:
+        return
+    bands = {n: Band(*b) for n, b in json.loads(psd.attrs["surface_bands"]).items()}
+    scope_check(bands, psd.ranges["q"][0], str(psd.attrs["q_reference_source"]), zeta,
+                psd.attrs.get("coherence") in ("swept", "measured"), int(psd.attrs["rough_surfaces"]))
 
 
 def scope_check(bands, qL: float, source: str, zeta, coupled: bool, n_rough: int) -> None:
@@ -226,6 +231,8 @@ PSD_FILE_PARAMS = (
     Param("hurst", "quantity", "", default=0.5, lo=0.0, hi=1.0, lo_open=True,
           doc="Hurst exponent assumed by the '1d' (profile) conversion"),
     Param("variable", "str", default=None, doc="NetCDF: name of the PSD variable (default: the only one over q)"),
+    Param("select", "table", default=None,
+          doc="NetCDF: the slice of a PSD variable with more dimensions than q, e.g. { eta = 0.0 } for psd_combined"),
     Param("extend", "choice", default="none", choices=("none", "power_law", "zero"),
           doc="how to extend beyond the file's q range (none: error)"),
 )

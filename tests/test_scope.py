@@ -105,3 +105,18 @@ def test_plan_prints_the_reference_wavenumber_and_the_warning(tmp_path, capsys, 
     out, err = capsys.readouterr()
     assert "qL = 2e6 1/m (the lowest wavenumber of the solid, solid.qL" in out
     assert "roughcontact: warning:" in err and "substrate.qL" in err
+
+
+def test_the_check_also_runs_when_only_the_magnifications_changed(tmp_path):
+    """psd is then fresh and not recomputed: its stored result carries the surfaces' bands."""
+    _solid_psd(tmp_path)
+    text = _without_grid(_readme_scene()).replace("eta = [0.0, 1.0, -1.0]", "eta = 0.0")
+    path = tmp_path / "scene.toml"
+    path.write_text(text.replace("zeta = [4.0]", 'zeta = "all"'))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", SceneWarning)
+        _run_file(path, tmp_path / "out")
+    path.write_text(text)
+    assert {p.label: p.status for p in engine.plan(scenes.load(path), tmp_path / "out")}["psd"] == "fresh"
+    with pytest.warns(SceneWarning, match=r"substrate\.qL"):
+        _run_file(path, tmp_path / "out")
