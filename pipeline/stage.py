@@ -169,11 +169,14 @@ class Preview:
     keys: Mapping[str, str] = field(default_factory=dict)
     #: the values of (small) 1-D coordinates, where known in advance (e.g. the magnifications)
     coords: Mapping[str, np.ndarray] = field(default_factory=dict)
+    #: the finite values of (small) 1-D data variables, where known in advance (e.g. the mean
+    #: wavenumbers of measured bins, between which a measured PSD is interpolated)
+    values: Mapping[str, np.ndarray] = field(default_factory=dict)
 
     @classmethod
-    def of(cls, ds: xr.Dataset, small: int = 10**6) -> "Preview":
+    def of(cls, ds: xr.Dataset, small: int = 10**6, values_up_to: int = 10**4) -> "Preview":
         """The preview of a stored result (its coordinates and small 1-D variables are read)."""
-        ranges, coords = {}, {}
+        ranges, coords, data = {}, {}, {}
         for name, var in ds.variables.items():
             if var.ndim == 1 and var.size <= small and var.dtype.kind in "fiu":
                 values = np.asarray(var.values, dtype=float)
@@ -182,8 +185,11 @@ class Preview:
                     ranges[str(name)] = (float(finite.min()), float(finite.max()))
                 if name in ds.coords and var.dims == (name,):
                     coords[str(name)] = values
+                elif name in ds.data_vars and var.size <= values_up_to:
+                    data[str(name)] = finite
         return cls(sizes={str(k): int(v) for k, v in ds.sizes.items()}, ranges=ranges,
-                   variables=frozenset(str(v) for v in ds.data_vars), attrs=dict(ds.attrs), coords=coords)
+                   variables=frozenset(str(v) for v in ds.data_vars), attrs=dict(ds.attrs), coords=coords,
+                   values=data)
 
 
 @dataclass

@@ -56,18 +56,23 @@ def _measured(name: str, spec: dict, spectrum, q_grid: np.ndarray) -> tuple[np.n
     return extend_psd(q_grid, q_si, C, how if how != "none" else "zero"), attrs
 
 
-def _file_knots(inp: StageInput) -> list[float]:
-    """The rows of measured PSD files, between which the PSD is interpolated as a power law: as
-    nodes of the q grid they let the power-law quadrature integrate it exactly at any
-    points_per_decade (between them it would cut the kinks). A file denser than the grid is
-    left out: the grid would grow to its size."""
+def _measured_knots(inp: StageInput, topography: Preview | None) -> list[float]:
+    """The wavenumbers between which a measured PSD is interpolated as a power law (the rows of a
+    PSD file, the mean wavenumbers of a measured map's bins). As nodes of the q grid they let the
+    power-law quadrature integrate the interpolated PSD exactly at any points_per_decade (between
+    them it would cut the kinks). A table denser than the grid is left out: the grid would grow
+    to its size."""
     knots = []
     for name in SURFACES:
         spec = inp[name]
-        if is_rough(spec) and spec["kind"] == "psd_file":
+        if not is_rough(spec) or spec["kind"] == "self_affine":
+            continue
+        if spec["kind"] == "psd_file":
             q = inp.files[f"{name}.path"].q
-            if q.size <= inp["numerics.points_per_decade"] * np.log10(q[-1] / q[0]) + 1:
-                knots += [float(k) for k in q]
+        else:
+            q = topography.values.get(f"q_{name}_measured", np.array([])) if topography is not None else np.array([])
+        if q.size >= 2 and q.size <= inp["numerics.points_per_decade"] * np.log10(q.max() / q.min()) + 1:
+            knots += [float(k) for k in q]
     return knots
 
 
@@ -79,7 +84,7 @@ def _q_range(inp: StageInput, topography: Preview | None) -> tuple[float, float,
         if is_topography(inp[name]) and name not in bands:
             raise UserError("the measured maps give no wavenumber bins", key=f"{name}.files")
     knots = [inp[name][k] for name in SURFACES if is_rough(inp[name]) and inp[name]["kind"] == "self_affine"
-             for k in ("qL", "q0", "q1")] + _file_knots(inp)
+             for k in ("qL", "q0", "q1")] + _measured_knots(inp, topography)
     lo = inp["grid.q_min"] or (min(b.lo for b in bands.values()) if bands else None)
     hi = inp["grid.q_max"] or (max(b.hi for b in bands.values()) if bands else None)
     if lo is None or hi is None:

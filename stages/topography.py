@@ -114,7 +114,7 @@ def validate_topography(inp: StageInput) -> Preview:
     (from the Fourier lattice alone, no FFT) and whether the pair gives a coherence."""
     specs, prepared, edges, pair_note = _prepared(inp)
     paired = len(specs) == 2 and pair_note is None
-    ranges, bins = {}, np.zeros(edges.size - 1, bool)
+    ranges, values, bins = {}, {}, np.zeros(edges.size - 1, bool)
     for name in specs:
         other = prepared["solid" if name == "substrate" else "substrate"] if paired else [None] * len(prepared[name])
         lattice = [binned_wavenumbers(p["h"].shape, p["sizes"], edges, min(p["q_max"], r["q_max"]) if r else p["q_max"],
@@ -124,11 +124,12 @@ def validate_topography(inp: StageInput) -> Preview:
         if np.count_nonzero(n > 0) < 2:
             raise UserError("the measured maps give fewer than two wavenumber bins", key=f"{name}.files")
         ranges[f"q_{name}_measured"] = (float(np.nanmin(q)), float(np.nanmax(q)))
+        values[f"q_{name}_measured"] = q[np.isfinite(q)]  # as computed: the psd stage puts them in its q grid
     variables = {f"{kind}_{name}_measured" for name in specs for kind in ("psd", "q")}
     variables |= {"coherence", "cross_psd_measured", "coherence_error"} if paired else set()
     pairing = "paired" if paired else f"not paired: {pair_note}" if pair_note else "not paired: one surface only"
     return Preview(sizes={"q_bin": int(np.ptp(np.flatnonzero(bins))) + 1}, ranges=ranges,
-                   variables=frozenset(variables), attrs={"pairing": pairing})
+                   variables=frozenset(variables), attrs={"pairing": pairing}, values=values)
 
 
 def compute_topography(inp: StageInput) -> xr.Dataset:
