@@ -30,6 +30,8 @@ register_coords(
     v=Var("m/s", "sliding velocity"),
     T=Var("K", "temperature"),
     omega=Var("rad/s", "angular frequency"),
+    draw=Var("1", "spectrum draw: 0 = the measured spectrum, 1..N = spectra drawn within its statistical band",
+             standard_name="realization"),
 )
 
 #: E*, stored by the stages whose results are read against it (p/E*)
@@ -74,9 +76,15 @@ def is_topography(spec) -> bool:
     return spec is not None and spec.get("kind") == "topography"
 
 
+def is_measured(spec) -> bool:
+    """Whether a surface section is measured height data the topography stage analyses: kind
+    'topography' (files) or 'container' (a contact.engineering container)."""
+    return spec is not None and spec.get("kind") in ("topography", "container")
+
+
 def needs_topography(values) -> bool:
-    """Whether a scene (its section values) has a surface of kind 'topography'."""
-    return any(is_topography(values.get(name)) for name in SURFACES)
+    """Whether a scene (its section values) has a surface of kind 'topography' or 'container'."""
+    return any(is_measured(values.get(name)) for name in SURFACES)
 
 
 def _check_surface(values: dict, key: str) -> None:
@@ -140,6 +148,22 @@ TOPOGRAPHY_PARAMS = (
           doc="how the psd stage extends the measured PSD beyond its q range (none: error)"),
 )
 
+CONTAINER_PARAMS = (
+    Param("container", "path", doc="contact.engineering container (ZIP with the measurements and index.json / meta.yml); "
+          "units, sizes, height scale, detrending and reliability cutoffs come from its metadata"),
+    Param("surface", "str", default=None, doc="which surface of the container (by name) when it holds several"),
+    Param("analysis", "choice", default="area", choices=("area", "profiles"),
+          doc="maps: 2D radial PSD ('area') or average of the line scans along x ('profiles'); line scans: always profiles"),
+    Param("detrend", "choice", default=None, choices=tuple(DETREND_DEGREE),
+          doc="polynomial removed before the FFT (default: the measurement's detrend_mode, else mean if periodic, else plane)"),
+    Param("window", "choice", default=None, choices=("hann", "none"),
+          doc="window against edge leakage (default: hann if not periodic, else none)"),
+    Param("hurst", "quantity", "", default=0.5, lo=0.0, hi=1.0, lo_open=True,
+          doc="Hurst exponent assumed in the line-scan -> isotropic PSD conversion"),
+    Param("extend", "choice", default="none", choices=("none", "power_law", "zero"),
+          doc="how the psd stage extends the merged PSD beyond its q range (none: error)"),
+)
+
 
 def _surface_section(name: str, doc: str) -> Section:
     return Section(
@@ -148,7 +172,7 @@ def _surface_section(name: str, doc: str) -> Section:
         optional=True,
         discriminator="kind",
         variants={"self_affine": SELF_AFFINE_PARAMS, "psd_file": PSD_FILE_PARAMS, "topography": TOPOGRAPHY_PARAMS,
-                  "smooth": ()},
+                  "container": CONTAINER_PARAMS, "smooth": ()},
         check=_check_surface,
     )
 
@@ -205,6 +229,31 @@ register_section(
                   doc="highest wavenumber (default: highest of the surfaces)"),
         ),
         doc="the wavenumber grid shared by all stages",
+    )
+)
+
+
+def _check_bands(values: dict, key: str) -> None:
+    """``draws = N`` becomes the sweep dimension draw = 0..N (0: the measured spectrum)."""
+    n = values.get("draws")
+    if isinstance(n, np.ndarray) or float(n) != int(n):
+        raise UserError(f"expected a whole number of draws, got {n!r}", key=f"{key}.draws")
+    values["draws"] = np.arange(int(n) + 1, dtype=float) if int(n) > 0 else 0.0
+
+
+register_section(
+    Section(
+        "bands",
+        (
+            Param("draws", "sweep", "", default=0, lo=0, hi=100000, dim="draw",
+                  doc="spectra drawn within the measured PSDs' statistical band (0: none); a sweep dimension "
+                      "'draw' = 0..N that every downstream stage carries (0 = the measured spectrum)"),
+            Param("level", "quantity", "", default=0.9, lo=0.0, hi=1.0, lo_open=True, hi_open=True,
+                  doc="probability content of the bands (quantiles (1 - level)/2, 0.5, (1 + level)/2 of the draws)"),
+            Param("seed", "int", default=0, lo=0, doc="random seed of the draws (draw d uses the stream (seed, surface, d))"),
+        ),
+        doc="uncertainty bands: predictions from spectra drawn within the measured spectra's statistical band",
+        check=_check_bands,
     )
 )
 register_params(

@@ -1,0 +1,406 @@
+"""Statistical uncertainty of measured spectra, and spectra drawn within it.
+
+* How many independent Fourier modes a windowed scan really has in each bin
+  (:func:`window_mode_factor_area`, :func:`window_mode_factor_profiles`): a window correlates
+  neighbouring modes, so the C / sqrt(n) error of independent modes is too small.
+* The spread between several measurements of one surface (:func:`spread_inflation`): where
+  they disagree by more than their mode-counting errors allow, the error is inflated.
+* The bias of a bin average of a curved (power-law) PSD read at the bins' mean wavenumber
+  (:func:`bin_curvature_factor`).
+* Standard errors carried onto a wavenumber grid (:func:`psd_error_on_grid`), the combined
+  PSD's error (:func:`combined_psd_error`), and spectra / coherences drawn within their
+  statistical band (:func:`psd_draws_on_grid`, :func:`coherence_draws_on_grid`), reduced to
+  quantiles (:func:`quantiles`).
+
+Statistics: for a Gaussian random-phase surface each mode's power is exponentially
+distributed, so the mean of n independent modes is Gamma(n, C/n) distributed. See
+docs/measured-data.md and docs/theory.md, section "Spectra".
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import scipy.stats
+
+from .estimators import binned_psd_on_grid, coherence_on_grid
+
+# ----------------------------------------------------------------------------------------
+# Independent modes of a windowed scan
+# ----------------------------------------------------------------------------------------
+
+
+def window_lags(w, threshold=1e-4, max_lag=6):
+    """Squared correlations between the periodogram values of modes ``delta`` apart.
+
+    For a window w, the Fourier coefficients of w h are correlated with
+    rho(delta) = DFT(w^2)(delta) / sum(w^2); the powers of two modes of a Gaussian surface are
+    correlated with |rho|^2 (Isserlis). Their sum over all lags is
+    F = N sum(w^4) / (sum w^2)^2 (Parseval), the variance factor of a wide bin.
+
+    Parameters
+    ----------
+    w : array (nx,) or (nx, ny)
+        The window (dimensionless).
+    threshold : float
+        Lags with |rho|^2 below this are left out.
+    max_lag : int
+        Largest lag (lattice steps per axis) considered; a smooth window's correlations
+        decay within a few steps (Hann: |rho(1)|^2 = 4/9, |rho(2)|^2 = 1/36, then 0 in 1D).
+
+    Returns
+    -------
+    lags : int array (m, w.ndim)
+        Index offsets, zero lag excluded.
+    rho2 : array (m,)
+        |rho(delta)|^2.
+    F : float
+        N sum(w^4) / (sum w^2)^2 (1 for no window; 35/18 for a 1D Hann, about 4 for a radial Hann).
+    """
+    w2 = np.asarray(w, dtype=float) ** 2
+    d = np.arange(-max_lag, max_lag + 1)
+    rho = w2
+    for axis, n in enumerate(w2.shape):  # DFT at the small lags only, one axis at a time
+        k = min(max_lag, n // 2)
+        phase = 2.0 * np.pi * np.outer(np.arange(n), d[max_lag - k:max_lag + k + 1]) / n
+        rho = np.moveaxis(np.tensordot(np.moveaxis(rho, axis, -1), np.cos(phase) - 1j * np.sin(phase), axes=1), -1, axis)
+    rho2 = np.abs(rho) ** 2 / np.sum(w2) ** 2
+    index = np.argwhere(rho2 > threshold)
+    lags = index - np.array([min(max_lag, n // 2) for n in w2.shape])
+    keep = np.any(lags != 0, axis=1)
+    F = float(w2.size * np.sum(w2 * w2) / np.sum(w2) ** 2)
+    return lags[keep], rho2[tuple(index[keep].T)], F
+
+
+def _bin_index(q, edges, q_max):
+    """Bin of each wavenumber (0-based), -1 where dropped (outside the edges, q = 0, q > q_max)."""
+    nb = edges.size - 1
+    b = np.searchsorted(edges, q) - 1
+    b[(q > q_max) | (q == 0.0) | (b < 0) | (b >= nb)] = -1
+    return b
+
+
+def window_mode_factor_area(nx, ny, sx, sy, edges, q_max, w, box=192):
+    """Per bin, the factor by which a window divides the independent modes of a map.
+
+    Var(bin mean) = 2 S C^2 / m^2 with m the bin's modes in the full Fourier plane and
+    S = sum over pairs (i, j) of the bin of |rho(q_i - q_j)|^2, so n_eff = m^2 / (2 S) and the
+    factor n / n_eff = 2 n S / m^2 with n = m / 2. S is summed exactly over the whole Fourier
+    plane (lags wrapping around) for maps of up to 2 ``box`` points a side; for larger maps
+    over the modes within ``box`` lattice steps of the origin (the thin low-q bins, where it
+    matters), and a bin reaching beyond gets the wide-bin factor F of :func:`window_lags`.
+
+    Parameters
+    ----------
+    nx, ny : int
+        Grid points.
+    sx, sy : float
+        Physical sizes (m).
+    edges : array
+        Bin edges (1/m).
+    q_max : float
+        Highest wavenumber used (1/m).
+    w : array (nx, ny)
+        The window applied to the heights.
+    box : int
+        Half-width (lattice steps) of the exactly summed region.
+
+    Returns
+    -------
+    array (len(edges) - 1,)
+        Factor >= 1 (1 where a bin has no modes).
+    """
+    lags, rho2, F = window_lags(w)
+    reach = int(np.abs(lags).max()) if lags.size else 0
+    whole = nx <= 2 * box and ny <= 2 * box  # the whole Fourier plane, lags wrapping around
+    if whole:
+        ix, iy = np.fft.fftfreq(nx, 1.0 / nx), np.fft.fftfreq(ny, 1.0 / ny)
+    else:
+        bx, by = min(box, nx // 2 - 1), min(box, ny // 2 - 1)
+        ix, iy = np.arange(-bx, bx + 1), np.arange(-by, by + 1)
+    b = _bin_index(2.0 * np.pi * np.hypot(ix[:, None] / sx, iy[None, :] / sy), edges, q_max)
+    nb = edges.size - 1
+    m = np.bincount(b[b >= 0], minlength=nb).astype(float)
+    S = m.copy()
+    for (dx, dy), r2 in zip(lags, rho2):
+        if whole:
+            a, c = b, np.roll(b, (-dx, -dy), axis=(0, 1))
+        else:
+            a = b[max(0, -dx):b.shape[0] - max(0, dx), max(0, -dy):b.shape[1] - max(0, dy)]
+            c = b[max(0, dx):b.shape[0] - max(0, -dx), max(0, dy):b.shape[1] - max(0, -dy)]
+        same = (a == c) & (a >= 0)
+        S += r2 * np.bincount(a[same], minlength=nb)
+    inner = np.inf if whole else 2.0 * np.pi * min((bx - reach) / sx, (by - reach) / sy)
+    exact = (np.minimum(edges[1:], q_max) <= inner) | (edges[:-1] >= q_max)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        factor = np.where(m > 0, S / m, 1.0)
+    return np.maximum(np.where(exact, factor, F), 1.0)
+
+
+def window_mode_factor_profiles(nx, sx, edges, q_max, w):
+    """Per bin, the factor by which a window along x divides the independent modes of each
+    line scan: n_eff = n^2 / S, S = sum over mode pairs (i, j > 0) of the bin of
+    |rho(i - j)|^2 + |rho(i + j)|^2 (see :func:`window_mode_factor_area`).
+
+    Parameters
+    ----------
+    nx : int
+        Points per profile.
+    sx : float
+        Scan length (m).
+    edges : array
+        Bin edges (1/m).
+    q_max : float
+        Highest wavenumber used (1/m).
+    w : array (nx,)
+        The window.
+
+    Returns
+    -------
+    array (len(edges) - 1,)
+        Factor >= 1 (1 where a bin has no modes).
+    """
+    w2 = np.asarray(w, dtype=float) ** 2
+    rho2 = np.abs(np.fft.fft(w2)) ** 2
+    rho2 /= rho2[0]
+    top = nx // 2
+    index = np.arange(1, top + 1)
+    b = _bin_index(2.0 * np.pi * index / sx, edges, q_max)
+    nb = edges.size - 1
+    n = np.bincount(b[b >= 0], minlength=nb).astype(float)
+    S = np.zeros(nb)
+    signed = np.flatnonzero(rho2 > 1e-6)
+    signed = np.where(signed > top, signed - nx, signed)
+    for lag in signed:
+        for j in (index + lag, lag - index, lag + nx - index):  # rho(i - j) and rho(i + j), j in 1..nx/2
+            ok = (j >= 1) & (j <= top)
+            same = np.zeros_like(ok)
+            same[ok] = (b[ok] == b[j[ok] - 1]) & (b[ok] >= 0)
+            S += rho2[lag % nx] * np.bincount(b[same], minlength=nb)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.maximum(np.where(n > 0, S / n, 1.0), 1.0)
+
+
+# ----------------------------------------------------------------------------------------
+# Several measurements of one surface
+# ----------------------------------------------------------------------------------------
+
+
+def spread_inflation(values, modes, merged, alpha=0.01):
+    """Error inflation from the spread between several measurements of one surface.
+
+    In each bin, chi^2 = sum_f n_f (C_f - C)^2 / C^2 over the measurements f with modes there
+    (C: their n-weighted mean; each C_f has variance C^2 / n_f) is chi-square distributed
+    with k - 1 degrees of freedom when they estimate one PSD. Where chi^2 exceeds its
+    (1 - alpha) quantile, the measurements disagree beyond their statistics (instrument
+    artefacts, anisotropy, a drifting calibration) and the error is multiplied by the Birge
+    ratio sqrt(chi^2 / (k - 1)); elsewhere it is left as it is.
+
+    Parameters
+    ----------
+    values : array (k, nbins)
+        Each measurement's binned PSD (m^4; NaN or anything where it has no modes).
+    modes : array (k, nbins)
+        Each measurement's independent modes per bin (0 where none).
+    merged : array (nbins,)
+        The merged PSD (m^4).
+    alpha : float
+        Significance level of the test.
+
+    Returns
+    -------
+    ratio : array (nbins,)
+        Birge ratio sqrt(chi^2 / (k - 1)); NaN where fewer than two measurements have modes.
+    inflation : array (nbins,)
+        Factor >= 1 for the standard error.
+    """
+    has = modes > 0
+    k = has.sum(axis=0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        dev = np.where(has, modes * (np.nan_to_num(values) - merged) ** 2, 0.0).sum(axis=0) / merged**2
+        ratio = np.where(k >= 2, np.sqrt(dev / np.maximum(k - 1, 1)), np.nan)
+    limit = scipy.stats.chi2.ppf(1.0 - alpha, np.maximum(k - 1, 1))
+    inflation = np.where((k >= 2) & (dev > limit), ratio, 1.0)
+    return ratio, np.nan_to_num(inflation, nan=1.0)
+
+
+# ----------------------------------------------------------------------------------------
+# Bins onto the grid
+# ----------------------------------------------------------------------------------------
+
+
+def bin_curvature_factor(q, C, bins_per_decade, span=2):
+    """Factor turning a bin's mean PSD into the PSD at the bin's mean wavenumber.
+
+    A bin averages C over its modes; for a local power law C ~ q^(-a) that average exceeds
+    C(<q>) by exp(a (1 + a) v / 2) to second order, with v = var(ln q) over the bin,
+    (ln 10 / bins_per_decade)^2 / 12 for a filled bin (about +0.9 % for a = 3.6 at 20 bins per
+    decade). The slope a is fitted in log-log over the ``span`` bins on either side.
+
+    Parameters
+    ----------
+    q, C : arrays
+        Valid bins (q increasing, 1/m; C > 0, m^4).
+    bins_per_decade : int
+        Bin width.
+
+    Returns
+    -------
+    array
+        exp(-a (1 + a) v / 2), dimensionless.
+    """
+    x, y = np.log(q), np.log(C)
+    a = np.zeros_like(x)
+    for i in range(x.size):
+        lo, hi = max(0, i - span), min(x.size, i + span + 1)
+        if hi - lo >= 2:
+            xs = x[lo:hi] - x[lo:hi].mean()
+            a[i] = -np.sum(xs * (y[lo:hi] - y[lo:hi].mean())) / np.sum(xs * xs)
+    v = (math.log(10.0) / bins_per_decade) ** 2 / 12.0
+    return np.exp(-a * (1.0 + a) * v / 2.0)
+
+
+def _grid_weights(q_grid, q, how):
+    """For each grid node, the two bins it is read from and the weight t of the second:
+    C_grid = C_a^(1-t) C_b^t (log-log interpolation, or the power-law tail of
+    :func:`roughcontact.physics.estimators.binned_psd_on_grid`); ``inside`` is False where the
+    grid node gets 0 (beyond the bins with ``how`` 'zero' or 'none')."""
+    lx, x = np.log(q_grid), np.log(q)
+    j = np.clip(np.searchsorted(x, lx) - 1, 0, x.size - 2)
+    a, b = j, j + 1
+    inside = (lx >= x[0] - 1e-12) & (lx <= x[-1] + 1e-12)
+    if how == "power_law":
+        k = min(3, x.size - 1)
+        below, above = lx < x[0], lx > x[-1]
+        a, b = np.where(below, 0, np.where(above, x.size - 1 - k, a)), np.where(below, k, np.where(above, x.size - 1, b))
+        inside = np.ones_like(inside)
+    t = (lx - x[a]) / (x[b] - x[a])
+    return a, b, t, inside
+
+
+def psd_error_on_grid(q_grid, q, C, err, how):
+    """Standard error (m^4) of a binned PSD put on ``q_grid`` by
+    :func:`roughcontact.physics.estimators.binned_psd_on_grid`, bins independent:
+    the relative error of C_a^(1-t) C_b^t is sqrt((1-t)^2 r_a^2 + t^2 r_b^2) with r = err / C;
+    0 where the grid gets 0.
+
+    Parameters
+    ----------
+    q_grid : array
+        Grid (1/m).
+    q, C, err : arrays (m,)
+        Valid bins: wavenumbers (increasing), PSD and its standard error (m^4).
+    how : str
+        'none', 'zero' or 'power_law' (as the PSD was extended).
+    """
+    a, b, t, inside = _grid_weights(q_grid, q, how)
+    r = err / C
+    rel = np.sqrt((1.0 - t) ** 2 * r[a] ** 2 + t**2 * r[b] ** 2)
+    return np.where(inside, binned_psd_on_grid(q_grid, q, C, how) * rel, 0.0)
+
+
+def coherence_error_on_grid(q_grid, q, err):
+    """Standard error of a binned coherence put on ``q_grid`` by
+    :func:`roughcontact.physics.estimators.coherence_on_grid` (linear in log q, constant beyond
+    the bins), bins independent: sqrt((1-t)^2 e_a^2 + t^2 e_b^2). Dimensionless."""
+    a, b, t, _ = _grid_weights(q_grid, q, "none")
+    t = np.clip(t, 0.0, 1.0)
+    return np.sqrt((1.0 - t) ** 2 * err[a] ** 2 + t**2 * err[b] ** 2)
+
+
+def combined_psd_error(C1, C2, eta, s1, s2, s_eta):
+    """Linear (delta-method) standard error of the combined PSD C = C1 + C2 - 2 eta sqrt(C1 C2)
+    (seed eq 52) from independent errors s1, s2 (m^4) of C1, C2 and s_eta of eta.
+
+    dC/dC1 s1 = (C1 - eta sqrt(C1 C2)) s1 / C1, likewise for C2, and dC/deta = -2 sqrt(C1 C2).
+
+    Returns
+    -------
+    array
+        Standard error (m^4), broadcast over the inputs.
+    """
+    g = np.sqrt(C1 * C2)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        t1 = np.where(C1 > 0, (C1 - eta * g) * s1 / np.where(C1 > 0, C1, 1.0), s1)
+        t2 = np.where(C2 > 0, (C2 - eta * g) * s2 / np.where(C2 > 0, C2, 1.0), s2)
+    return np.sqrt(t1**2 + t2**2 + (2.0 * g * s_eta) ** 2)
+
+
+# ----------------------------------------------------------------------------------------
+# Draws within the band
+# ----------------------------------------------------------------------------------------
+
+
+def psd_draws(C, modes, draws, seed, stream):
+    """Binned PSDs drawn within their statistical band.
+
+    A bin's mean of n independent exponential mode powers is C Gamma(n, 1)/n; given the
+    measured value, C_true is drawn from its fiducial (Jeffreys-prior posterior) distribution,
+    inverse gamma: C* = C n / Gamma(n, 1). Bins are independent. Draw 0 is the measurement
+    itself; draw d > 0 uses the random stream (seed, stream, d), so a draw does not depend on
+    which other draws are computed with it (chunks).
+
+    Parameters
+    ----------
+    C : array (m,)
+        Measured bin PSD (m^4, > 0).
+    modes : array (m,)
+        Effective independent modes per bin, (C / standard error)^2.
+    draws : int array (any shape)
+        Draw indices.
+    seed, stream : int
+        Random seed of the scene and the quantity's stream (one per surface).
+
+    Returns
+    -------
+    array draws.shape + (m,)
+        Drawn PSDs (m^4).
+    """
+    flat = np.ravel(draws).astype(int)
+    out = np.empty((flat.size, C.size))
+    for i, d in enumerate(flat):
+        if d == 0:
+            out[i] = C
+        else:
+            g = np.random.default_rng([int(seed), int(stream), int(d)]).gamma(modes)
+            out[i] = C * modes / g
+    return out.reshape(np.shape(draws) + (C.size,))
+
+
+def psd_draws_on_grid(draws, q_grid, q, C, modes, how, seed, stream):
+    """:func:`psd_draws` put on ``q_grid`` with
+    :func:`roughcontact.physics.estimators.binned_psd_on_grid` (m^4), shape draws.shape + (len(q_grid),)."""
+    binned = psd_draws(C, modes, draws, seed, stream).reshape(-1, C.size)
+    out = np.stack([binned_psd_on_grid(q_grid, q, c, how) for c in binned])
+    return out.reshape(np.shape(draws) + (q_grid.size,))
+
+
+def coherence_draws_on_grid(draws, q_grid, q, eta, err, seed, stream):
+    """Coherences drawn within their band and put on ``q_grid``.
+
+    Per bin, Fisher's z = artanh(eta) is normal with standard error err / (1 - eta^2)
+    (= 1/sqrt(2 n)); draw 0 is the measurement. Interpolated as
+    :func:`roughcontact.physics.estimators.coherence_on_grid`.
+
+    Returns
+    -------
+    array draws.shape + (len(q_grid),)
+        Dimensionless, in [-1, 1].
+    """
+    flat = np.ravel(draws).astype(int)
+    eta = np.clip(eta, -1.0, 1.0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        z = np.arctanh(eta)
+        sz = np.where(np.abs(eta) < 1.0, err / (1.0 - eta * eta), 0.0)
+    out = np.empty((flat.size, q_grid.size))
+    for i, d in enumerate(flat):
+        e = eta if d == 0 else np.tanh(z + sz * np.random.default_rng([int(seed), int(stream), int(d)]).standard_normal(z.size))
+        out[i] = coherence_on_grid(q_grid, q, np.where(np.isfinite(e), e, eta))
+    return out.reshape(np.shape(draws) + (q_grid.size,))
+
+
+def quantiles(values, probabilities, axis=-1):
+    """Quantiles of ``values`` along ``axis`` (linear interpolation between order statistics,
+    NaNs ignored), the new axis first. Units of ``values``."""
+    return np.nanquantile(values, probabilities, axis=axis)
