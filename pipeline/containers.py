@@ -104,7 +104,7 @@ def _measurement(container, index: int, name: str, datafile: str, members: set, 
     if datafile not in members:
         raise _fail(path, key, f"{where}: the data file is not in the archive")
     with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
+        warnings.simplefilter("always", UserWarning)  # SurfaceTopography's notes (metadata and file disagree, ...)
         try:
             topo = container[index]
             heights = topo.heights()
@@ -132,10 +132,9 @@ def _measurement(container, index: int, name: str, datafile: str, members: set, 
         raise _fail(path, key, f"{where}: cannot evaluate the reliability cutoff from the instrument metadata "
                                f"({exc.__class__.__name__}: {str(exc)[:120]})") from None
     info = topo.info or {}
-    meta = {"measurement": name, "datafile": datafile, "unit_from": "container metadata or data file",
-            "detrend_mode": info.get("detrend_mode"), "height_scale": info.get("height_scale"),
+    meta = {"measurement": name, "datafile": datafile, "unit": str(unit), "detrend_mode": info.get("detrend_mode"), "height_scale": info.get("height_scale"),
             "instrument": _plain(info.get("instrument")), "reliability_cutoff_m": cutoff,
-            "reliability_cutoff_source": source, "notes": [str(w.message)[:200] for w in caught]}
+            "reliability_cutoff_source": source, "notes": [str(w.message)[:200] for w in caught if issubclass(w.category, UserWarning)]}
     sizes = tuple(float(s) * factor for s in np.atleast_1d(topo.physical_sizes))
     return Topography(path=Path(f"{path}[{name}]"), heights=heights, physical_sizes=sizes,
                       periodic=bool(topo.is_periodic), unit=str(unit), format="contact.engineering container",
@@ -169,8 +168,8 @@ def read_container(path: Path, *, key: str = "surface", surface: str | None = No
     if len(labels) < 2:
         only = f" (measurement {labels[0]!r}, data file {datafiles[0]!r})" if labels else ""
         raise _fail(path, key, f"surface {name!r} has {len(labels)} measurement(s){only}; a container is merged "
-                               "from several measurements (scales): add measurements, or give the single file as "
-                               "kind = 'topography'")
+                               "from several measurements (scales): add measurements, or unzip the container and give "
+                               "that file as kind = 'topography'")
     out = Container(path=path, surface=name)
     for i, (label, datafile) in enumerate(zip(labels, datafiles)):
         out.measurements.append(_measurement(container, i, label, datafile, in_archive, path, key))

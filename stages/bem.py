@@ -211,7 +211,7 @@ def compute_bem(inp: StageInput) -> xr.Dataset:
         extra = [d for d in psd[name].dims if d != "q"]
         if extra:
             raise UserError(f"the bem stage does not sweep {', '.join(extra)}: give a single value",
-                            key=f"{name.removeprefix('psd_')}.hrms")
+                            key="bands.draws" if "draw" in extra else f"{name.removeprefix('psd_')}.hrms")
     C1, C2 = psd["psd_substrate"].values, psd["psd_solid"].values
     E_star = e_star(inp)
     names = map_surfaces(inp)

@@ -58,7 +58,7 @@ def _point_bytes(params, wanted, upstream) -> int:
     return per
 
 
-register(
+STAGE = register(
     Stage(
         name="contact",
         version="1",

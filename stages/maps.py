@@ -16,7 +16,7 @@ import xarray as xr
 
 from roughcontact.physics.estimators import binned_psd_on_grid, coherence_on_grid, valid_bins
 from roughcontact.physics.preprocessing import detrend, hann_window_1d, hann_window_radial, tip_radius_cutoff
-from roughcontact.physics.uncertainty import bin_curvature_factor
+from roughcontact.physics.uncertainty import bin_curvature_factor, interpolation_unbiasing
 from roughcontact.stage import FileInput, UserError
 
 from .shared import DETREND_DEGREE, SURFACES, is_rough, is_topography
@@ -140,7 +140,7 @@ def measured_psd_on_grid(ds: xr.Dataset, name: str, q_grid: np.ndarray, how: str
     (m^4; :func:`measured_bins` put on the grid by
     :func:`roughcontact.physics.estimators.binned_psd_on_grid`) and the attributes saying how.
     ``how`` = ``name.extend``: beyond the measured range 'none' is an error."""
-    q, C, _ = measured_bins(ds, name)
+    q, C, err = measured_bins(ds, name)
     if q.size < 2:
         raise UserError("the measured PSD has fewer than two valid bins", key=f"{name}.files")
     lo, hi = q_grid[0], q_grid[-1]
@@ -150,9 +150,12 @@ def measured_psd_on_grid(ds: xr.Dataset, name: str, q_grid: np.ndarray, how: str
             f"set grid.q_min/q_max inside it or {name}.extend = 'power_law' or 'zero'", key=f"{name}.extend")
     attrs = {"surface": "measured topography", "source_files": ds[f"psd_{name}_measured"].attrs.get("files", ""),
              "interpolation": "log-log linear between the bins' PSD at their mean |q| (bin averages corrected for the "
-                              "spectrum's curvature across a bin)", "extension": how,
+                              "spectrum's curvature across a bin; the interpolation's bias between bins of few modes "
+                              "removed)", "extension": how,
              "measured_q_range": f"{q[0]:.6g} {q[-1]:.6g} 1/m"}
-    return binned_psd_on_grid(q_grid, q, C, how), attrs
+    with np.errstate(divide="ignore"):
+        modes = np.where(err > 0, (C / np.where(err > 0, err, 1.0)) ** 2, 1e12)
+    return binned_psd_on_grid(q_grid, q, C, how) * interpolation_unbiasing(q_grid, q, modes, how), attrs
 
 
 def measured_coherence_on_grid(ds: xr.Dataset, q_grid: np.ndarray) -> np.ndarray:

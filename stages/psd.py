@@ -103,7 +103,7 @@ def _surface(inp: StageInput, name: str, q: xr.DataArray, draw):
         err = psd_error_grid(ds, name, q_values, spec["extend"])
         if draw is None:
             return xr.DataArray(values, dims=("q",)), attrs, err
-        attrs["draws"] = "draw 0: the measured PSD; draws 1..N: C* = C n / Gamma(n, 1) per bin (n = (C / error)^2)"
+        attrs["draws"] = "draw 0: the measured PSD; draws 1..N: C* = C n / Gamma(n + 1, 1) per bin (n = (C / error)^2; mean C)"
         return drawn_psd(draw, ds, name, q_values, spec["extend"], inp["bands.seed"]), attrs, err
     values, attrs = _measured(name, spec, inp.files[f"{name}.path"], q_values)
     return xr.DataArray(values, dims=("q",)), dict(attrs, error="none known (a PSD file carries no errors)"), err
@@ -175,7 +175,7 @@ def _files(name: str) -> FileInput:
     return FileInput(f"{name}.path", reader="spectrum", options=options)
 
 
-register(
+STAGE = register(
     Stage(
         name="psd",
         version="2",

@@ -143,7 +143,7 @@ def _beta_attrs(refinement: str) -> dict:
     }
 
 
-register(
+STAGE = register(
     Stage(
         name="separation",
         version="1",
