@@ -426,9 +426,14 @@ def psd_draws_on_grid(draws, q_grid, q, C, modes, how, seed, stream):
     measured PSD on the grid."""
     flat = np.ravel(draws).astype(int)
     binned = psd_draws(C, modes, flat, seed, stream)
-    nominal = interpolation_unbiasing(q_grid, q, modes, how)
-    drawn = interpolation_unbiasing(q_grid, q, modes, how, drawn=True)
-    out = np.stack([binned_psd_on_grid(q_grid, q, c, how) * (drawn if d else nominal) for c, d in zip(binned, flat)])
+    a, b, t, inside = _grid_weights(q_grid, q, how)
+    with np.errstate(divide="ignore"):
+        logs = np.log(binned)
+    out = np.where(inside, np.exp((1.0 - t) * logs[:, a] + t * logs[:, b]), 0.0)  # all draws at once
+    out *= interpolation_unbiasing(q_grid, q, modes, how, drawn=True)
+    first = np.flatnonzero(flat == 0)
+    if first.size:  # the measurement itself, exactly as the nominal path puts it on the grid
+        out[first] = binned_psd_on_grid(q_grid, q, C, how) * interpolation_unbiasing(q_grid, q, modes, how)
     return out.reshape(np.shape(draws) + (q_grid.size,))
 
 

@@ -88,6 +88,8 @@ def compute_bands(inp: StageInput) -> xr.Dataset:
     out = {}
     for name in sorted(set(inp.wanted) | set(ALWAYS)):
         st, var = SOURCE[name]
+        if var not in inp.upstream[st.name]:  # an optional output the scene did not ask for
+            raise UserError(f"{name} needs {var}: add it to outputs.variables", key="outputs.variables")
         da = inp.upstream[st.name][var]
         if "draw" not in da.dims:  # does not depend on the measured spectra
             da = da.expand_dims(draw=inp.upstream["psd"]["draw"].size)
