@@ -69,6 +69,34 @@ def inverse_w(q, C):
     return np.sqrt(np.pi * cumulative_integral(q, q**3 * np.asarray(C, dtype=float)))
 
 
+#: Abramowitz & Stegun 5.1.56: x e^x E1(x) = P(x)/Q(x) within 2e-8 for x >= 1 (P, Q monic quartics)
+_E1_P = (8.5733287401, 18.0590169730, 8.6347608925, 0.2677737343)
+_E1_Q = (9.5733223454, 25.6329561486, 21.0996530827, 3.9584969228)
+
+
+def exp1_kernel(x):
+    """E1(x) for x >= 0, 0 from x = 750 on (below 1e-328): scipy's exp1 below 1 and the rational
+    approximation of Abramowitz & Stegun 5.1.56 (relative error < 2e-8) above, where scipy's
+    continued fraction is 3-10 times slower; the separation kernel evaluates E1 at every
+    (pressure, node) pair (and at every spectrum draw of the uncertainty bands).
+
+    References
+    ----------
+    Abramowitz & Stegun, Handbook of Mathematical Functions, eq 5.1.56.
+    """
+    x = np.asarray(x, dtype=float)
+    out = np.zeros_like(x)
+    low = x < 1.0
+    out[low] = exp1(x[low])
+    high = ~low & (x < 750.0)
+    y = x[high]
+    p = (((y + _E1_P[0]) * y + _E1_P[1]) * y + _E1_P[2]) * y + _E1_P[3]
+    q = (((y + _E1_Q[0]) * y + _E1_Q[1]) * y + _E1_Q[2]) * y + _E1_Q[3]
+    with np.errstate(under="ignore"):
+        out[high] = np.exp(-y) / y * p / q
+    return out
+
+
 def e1_integral(s, a):
     """F0(s) = \\int_0^s E1(a^2 / s'^2) ds' in closed form (same units as ``s``).
 
@@ -256,9 +284,9 @@ def separation_nodes(q, C, q_upper, panels_per_decade=4, order=4, depth=10.0):
 
 def _cumulative_at(values, count):
     """sum(values[..., :count_j]) for each j: values (..., K), count (..., m)."""
-    cum = np.concatenate([np.zeros(values.shape[:-1] + (1,)), np.cumsum(values, axis=-1)], axis=-1)
+    cum = np.cumsum(values, axis=-1)
     count = np.broadcast_to(count, values.shape[:-1] + count.shape[-1:])
-    return np.take_along_axis(cum, count, -1)
+    return np.where(count > 0, np.take_along_axis(cum, np.maximum(count - 1, 0), -1), 0.0)
 
 
 def separation_moments(s, weight, count, s_tail, q_tail):
@@ -366,10 +394,10 @@ def mean_separation(p, s, weight, count, s_tail, q_tail, *, E_star, alpha, refin
     """
     a = np.asarray(p, dtype=float)[..., None] / E_star
     with np.errstate(divide="ignore", over="ignore", under="ignore"):
-        z = np.where(s > 0, a / np.where(s > 0, s, 1.0), np.inf)
-        x = z * z
-        kernel = np.where(x < 750.0, exp1(np.minimum(x, 750.0)), 0.0)
-    body = _cumulative_at(weight * kernel, count)
+        z = a * np.where(s > 0, 1.0 / np.where(s > 0, s, 1.0), np.inf)
+        kernel = exp1_kernel(z * z)
+    kernel *= weight
+    body = _cumulative_at(kernel, count)
     tail = e1_integral(s_tail, a)
     u = alpha / np.sqrt(np.pi) * (body + tail / q_tail[..., None])
     if refinement == "yang_persson":

@@ -20,7 +20,13 @@ from roughcontact.stage import Figure, Stage, StageInput, UserError, Var, regist
 
 from .adhesion import STAGE as ADHESION
 from .contact import STAGE as CONTACT
-from .figures.bands import figure_band_contact_area, figure_band_friction, figure_band_psd, figure_band_separation
+from .figures.bands import (
+    figure_band_contact_area,
+    figure_band_friction,
+    figure_band_psd,
+    figure_band_separation,
+    figure_band_stress,
+)
 from .friction import STAGE as FRICTION
 from .psd import STAGE as PSD
 from .separation import STAGE as SEPARATION
@@ -120,6 +126,8 @@ register(
                    figure_band_contact_area, outputs=("contact_area_ratio_band",)),
             Figure("bands_separation", "u(p) over the measured band, with its uncertainty band", ("bands",),
                    figure_band_separation, outputs=("mean_separation_band",)),
+            Figure("bands_stress_distribution", "P(sigma) over the measured band, with its uncertainty band", ("bands",),
+                   figure_band_stress, outputs=("stress_distribution_band",)),
             Figure("bands_friction", "mu(v) with its uncertainty band", ("bands",), figure_band_friction,
                    outputs=("friction_coefficient_band",)),
         ),

@@ -130,6 +130,18 @@ def compute_separation(inp: StageInput) -> xr.Dataset:
     return ds
 
 
+def _point_bytes(params, wanted, upstream) -> int:
+    """Working memory per sweep point: a few float64 temporaries over the quadrature nodes."""
+    if "psd" not in upstream:
+        return 512
+    q = upstream["psd"]["q"].values
+    zeta = params["contact.zeta"]
+    zetas = q / q[0] if isinstance(zeta, str) else np.atleast_1d(np.asarray(zeta, dtype=float))
+    nodes = separation_node_count(q, zetas * q[0], params["numerics.separation_panels_per_decade"],
+                                  params["numerics.separation_gauss_points"], float(params["numerics.separation_depth"]))
+    return 8 * 6 * nodes
+
+
 def _beta_attrs(refinement: str) -> dict:
     return {
         "formula": "beta = eps exp(-int q^2 C w ln w dq / int q^2 C w dq), eps = exp(-gamma_Euler/2)"
@@ -160,5 +172,6 @@ STAGE = register(
         doc="Mean interfacial separation u(p, zeta, eta) (eq 57) and its small-pressure law u0, beta (eqs 59-60).",
         main_outputs=("mean_separation",),
         tolerance=1e-4,
+        point_bytes=_point_bytes,
     )
 )

@@ -91,7 +91,9 @@ def _surface_vars(name, spectra, described, bpd):
     q, C, n, err, ratio = merged_psd(spectra)
     common = {"surface": name, "files": json.dumps(described),
               "convention": "Persson, C(q) = (2 pi)^-2 int d^2x <hh> e^-iqx",
-              "radial_average": f"mean over Fourier modes with |q| in log bins, {bpd} per decade"}
+              "radial_average": f"mean over Fourier modes with |q| in log bins, {bpd} per decade",
+              "merge": "in each bin, the files (measurements) with modes there averaged with weights n, their effective "
+                       "independent modes (inverse-variance weights); each file's range in 'files' (q_range_per_m)"}
     estimate = ("C / sqrt(n), n the independent modes (Gaussian random-phase statistics; a window's correlation "
                 "of neighbouring modes counted), times the Birge ratio where the files disagree beyond it (chi-square "
                 "test at 1 %); correlated profiles make it an underestimate")

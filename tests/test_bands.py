@@ -113,6 +113,7 @@ def test_band_of_the_contact_area_covers_the_true_value_90_percent_of_the_time()
         hits.append((lo <= true) & (true <= hi))
     coverage = np.mean(hits, axis=0)
     error = np.sqrt(0.9 * 0.1 / len(hits))
+    print(f"coverage of the 90 % band of A/A0 at A/A0 = 0.02, 0.08, 0.22: {coverage} +- {error:.3f} (binomial, n = 200)")
     assert np.all(np.abs(coverage - 0.9) < 3 * error), f"coverage {coverage} +- {error:.3f}"
 
 
@@ -143,8 +144,9 @@ def test_band_coverage_through_the_pipeline(tmp_path):
         true = erf(p / (2 * np.sqrt(persson_G(q, _psd(q), q[-1:], 10e6 / 0.75)[-1])))
         band = res["bands"]["contact_area_ratio_band"].isel(zeta=-1)
         hits.append((band.isel(quantile=0).values <= true) & (true <= band.isel(quantile=-1).values))
-    coverage = np.mean(hits, axis=0)
-    assert np.all(np.abs(coverage - 0.9) < 3 * np.sqrt(0.09 / len(hits))), coverage
+    coverage, error = np.mean(hits, axis=0), np.sqrt(0.09 / len(hits))
+    print(f"pipeline coverage of the 90 % band of A/A0 at p = {p} Pa: {coverage} +- {error:.3f} (binomial, n = {len(hits)})")
+    assert np.all(np.abs(coverage - 0.9) < 3 * error), coverage
 
 
 # -- the stage -------------------------------------------------------------------------------

@@ -4,8 +4,9 @@ magnification) with their uncertainty bands, and the combined PSD with its band.
 from __future__ import annotations
 
 
-def _label(variant: str, eta) -> str:
-    name = "measured pair" if variant == "base" else variant.replace("_", " ")
+def _label(variant: str, eta, res) -> str:
+    formula = res["psd"]["psd_combined"].attrs.get("formula", "") if "psd" in res else ""
+    name = ("measured eta(q)" if "measured eta" in formula else "scene") if variant == "base" else variant.replace("_", " ")
     return name if eta is None else f"{name}, eta = {float(eta):+g}"
 
 
@@ -35,7 +36,7 @@ def _series(results, stage: str, var: str, xdim: str):
             c = curve.sel(eta=eta) if eta is not None else curve
             b, notes = _reduce(b, ("quantile", xdim))
             c, _ = _reduce(c, (xdim,))
-            out.append((_label(variant, eta), c[xdim].values, c.values, b.isel(quantile=0).values,
+            out.append((_label(variant, eta, res), c[xdim].values, c.values, b.isel(quantile=0).values,
                         b.isel(quantile=-1).values, notes))
     return out
 
@@ -46,7 +47,7 @@ def _figure(results, stage, var, xdim, xlabel, ylabel, title, scale=1.0, logy=Fa
     fig, ax = plt.subplots(figsize=(6.2, 4.4))
     notes, level, zeta, n = set(), None, None, None
     for label, x, y, lo, hi, extra in _series(results, stage, var, xdim):
-        line, = ax.plot(x, y * scale, "-", lw=1.5, label=f"{label}: measured spectrum")
+        line, = ax.plot(x, y * scale, "-", lw=1.5, label=f"{label}: from the measured spectra")
         ax.fill_between(x, lo * scale, hi * scale, color=line.get_color(), alpha=0.25, lw=0)
         notes.update(extra)
     for res in results.values():
@@ -61,9 +62,9 @@ def _figure(results, stage, var, xdim, xlabel, ylabel, title, scale=1.0, logy=Fa
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
     sub = f"shaded: {float(level):.0%} band over {n} spectrum draws" if level is not None else ""
-    sub += f", zeta = {zeta:.4g} (the whole measured band)" if zeta is not None else ""
-    sub += f" ({', '.join(sorted(notes))})" if notes else ""
-    ax.set_title(f"{title}\n{sub}", fontsize=10)
+    sub += f"; zeta = {zeta:.4g}, the whole band" if zeta is not None else ""
+    sub += f"\n({', '.join(sorted(notes))})" if notes else ""
+    ax.set_title(f"{title}\n{sub}", fontsize=9.5)
     ax.grid(True, which="both" if logy else "major", alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
@@ -72,8 +73,44 @@ def _figure(results, stage, var, xdim, xlabel, ylabel, title, scale=1.0, logy=Fa
 
 def figure_band_contact_area(results):
     fig = _figure(results, "contact", "contact_area_ratio", "p", "nominal pressure p (Pa)", "A / A0",
-                  "Relative contact area with its uncertainty band")
-    fig.axes[0].set_ylim(0, 1.02)
+                  "Relative contact area with its uncertainty band", logy=True)
+    ax = fig.axes[0]
+    ax.set_ylim(top=1.05)
+    return fig
+
+
+def figure_band_stress(results):
+    """P(sigma) at three pressures (A/A0 about 0.05, 0.2, 0.5 for the first curve) at the top
+    magnification, with its band: the draws' quantiles at fixed sigma."""
+    import matplotlib.pyplot as plt
+
+    bands, contact = results["base"]["bands"], results["base"]["contact"]
+    band, nominal = bands["stress_distribution_band"], contact["stress_distribution"].isel(draw=0, drop=True)
+    area = contact["contact_area_ratio"].isel(draw=0, drop=True)
+    if "zeta" in band.dims:
+        zeta = float(band["zeta"].max())
+        band, nominal, area = band.sel(zeta=zeta), nominal.sel(zeta=zeta), area.sel(zeta=zeta)
+    band, notes = _reduce(band, ("quantile", "p", "stress_level"))
+    nominal, _ = _reduce(nominal, ("p", "stress_level"))
+    area, _ = _reduce(area, ("p",))
+    picks = sorted({int(abs(area - a).argmin()) for a in (0.05, 0.2, 0.5)})
+    fig, ax = plt.subplots(figsize=(6.2, 4.4))
+    for i in picks:
+        d, b = nominal.isel(p=i), band.isel(p=i)
+        sigma = d["sigma"].values / 1e6
+        line, = ax.plot(sigma, d.values * 1e6, lw=1.4, label=f"p = {float(d['p']) / 1e6:.3g} MPa (A/A0 = {float(area[i]):.2f})")
+        ax.fill_between(sigma, b.isel(quantile=0).values * 1e6, b.isel(quantile=-1).values * 1e6, color=line.get_color(),
+                        alpha=0.25, lw=0)
+    ax.set_xlim(left=0)
+    ax.set_ylim(bottom=0)
+    ax.set_xlabel("local stress sigma (MPa)")
+    ax.set_ylabel("P(sigma) (1/MPa)")
+    level, n = bands.attrs.get("level", 0.9), bands.attrs.get("draws")
+    ax.set_title(f"Stress distribution with its uncertainty band\nshaded: {float(level):.0%} band over {n} spectrum "
+                 "draws; the whole band" + (f"\n({', '.join(notes)})" if notes else ""), fontsize=9.5)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
     return fig
 
 
@@ -105,7 +142,7 @@ def figure_band_psd(results):
     ax.set_xlabel("wavenumber q (1/m)")
     ax.set_ylabel("C(q) (m$^4$, Persson convention)")
     ax.set_title(f"Combined PSD of the pair\nshaded: {float(level):.0%} band of the spectrum draws", fontsize=10)
-    ax.grid(True, which="both", alpha=0.3)
+    ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
     return fig
