@@ -17,6 +17,8 @@ volterra     partial-contact adhesion (the marching Volterra solver)
 viscoelastic complex modulus models and temperature shifts
 friction     viscoelastic (hysteretic) rubber friction
 estimators   spectral estimators on measured maps and profiles (PSD, coherence)
+modes        independent Fourier modes of windowed scans (how a window correlates modes)
+uncertainty  errors of measured spectra on the grid, spectra drawn within them, quantiles
 preprocessing  detrending, windows and the tip-radius cutoff of measured scans
 synthesis    random periodic surface pairs with given spectra and coherence; band limit of a map
 bem          the exact FFT boundary-element contact solve (tamaas, optional)

@@ -19,14 +19,13 @@ import xarray as xr
 
 from roughcontact.physics.estimators import merge_spectra
 from roughcontact.physics.preprocessing import hann_window_1d, hann_window_radial
+from roughcontact.physics.modes import window_mode_factor_area, window_mode_factor_profiles
 from roughcontact.physics.uncertainty import (
     coherence_draws_on_grid,
     coherence_error_on_grid,
     psd_draws_on_grid,
     psd_error_on_grid,
     spread_inflation,
-    window_mode_factor_area,
-    window_mode_factor_profiles,
 )
 from roughcontact.stage import FileInput, UserError
 

@@ -145,6 +145,49 @@ def test_not_a_container_and_several_surfaces(tmp_path):
     assert READERS["container"](tmp_path / "two.zip", key="solid", surface="b").surface == "b"
 
 
+# -- errors of windowed scans ------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("profiles", [False, True])
+def test_window_mode_factor_matches_the_variance_of_windowed_crops(profiles):
+    """Crops of larger random surfaces, Hann-windowed (radial for maps, along x for profiles):
+    the variance of each bin's PSD over 150 crops is C^2 / n times the predicted factor (about 4
+    for wide bins of a radial window, 35/18 for profiles) within the Monte-Carlo error."""
+    from roughcontact.physics.estimators import binned_spectra_area, binned_spectra_profiles
+    from roughcontact.physics.modes import window_mode_factor_area, window_mode_factor_profiles
+    from roughcontact.physics.preprocessing import hann_window_1d, hann_window_radial
+
+    rng = np.random.default_rng(5)
+    n, side = (1024 if profiles else 96), 1.0
+    edges = log_bin_edges(2 * np.pi / side, np.pi * n / side, 10)
+    q_max = np.pi * n / side
+
+    def psd(q):
+        return self_affine(q, 0.8, 2 * np.pi * 4 / side, 1.0)
+
+    if profiles:
+        w = hann_window_1d(n)
+        factor = window_mode_factor_profiles(n, side, edges, q_max, w)
+    else:
+        w = hann_window_radial(n, n, side, side)
+        factor = window_mode_factor_area(n, n, side, side, edges, q_max, w)
+    values = []
+    for _ in range(150):
+        big = synthesize(psd, 4 * n, 4 * n if not profiles else 8, 4 * side, 4 * side if not profiles else side, rng)
+        h = big[:n, :n] if not profiles else big[:n, :1]
+        h = h - h.mean()
+        r = (binned_spectra_profiles(h * w[:, None], side, edges, q_max, 0.5) if profiles else
+             binned_spectra_area(h * w, side, side, edges, q_max))
+        values.append(r["C11"])
+    values = np.array(values)
+    measured = values.var(axis=0) / values.mean(axis=0) ** 2 * r["n"]
+    ok = r["n"] >= 8
+    assert ok.sum() >= 5 and factor[ok].max() > (3.0 if not profiles else 1.7)
+    ratio = measured[ok] / factor[ok]
+    assert np.all(np.abs(ratio - 1) < 4 * np.sqrt(2 / 149)), ratio  # sampling error of a variance
+    assert abs(np.mean(ratio) - 1) < 0.12
+
+
 # -- the merged PSD against the known one ------------------------------------------------------
 
 

@@ -3,11 +3,22 @@ magnification) with their uncertainty bands, and the combined PSD with its band.
 
 from __future__ import annotations
 
+import numpy as np
+
 
 def _label(variant: str, eta, res) -> str:
     formula = res["psd"]["psd_combined"].attrs.get("formula", "") if "psd" in res else ""
-    name = ("measured eta(q)" if "measured eta" in formula else "scene") if variant == "base" else variant.replace("_", " ")
+    name = ("pair, measured eta(q)" if "measured eta" in formula else "scene") if variant == "base" else variant.replace("_", " ")
     return name if eta is None else f"{name}, eta = {float(eta):+g}"
+
+
+def _where(results, zeta) -> str:
+    """'the whole measured band' when zeta is the top of the q grid, else the magnification."""
+    psd = results["base"].get("psd")
+    if zeta is None:
+        return ""
+    top = float(psd["q"].values[-1] / psd["q"].values[0]) if psd is not None else None
+    return "the whole measured band" if top and abs(zeta / top - 1) < 1e-6 else f"zeta = {zeta:.4g}"
 
 
 def _reduce(da, keep):
@@ -47,7 +58,7 @@ def _figure(results, stage, var, xdim, xlabel, ylabel, title, scale=1.0, logy=Fa
     fig, ax = plt.subplots(figsize=(6.2, 4.4))
     notes, level, zeta, n = set(), None, None, None
     for label, x, y, lo, hi, extra in _series(results, stage, var, xdim):
-        line, = ax.plot(x, y * scale, "-", lw=1.5, label=f"{label}: from the measured spectra")
+        line, = ax.plot(x, y * scale, "-", lw=1.5, label=label)
         ax.fill_between(x, lo * scale, hi * scale, color=line.get_color(), alpha=0.25, lw=0)
         notes.update(extra)
     for res in results.values():
@@ -62,7 +73,7 @@ def _figure(results, stage, var, xdim, xlabel, ylabel, title, scale=1.0, logy=Fa
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
     sub = f"shaded: {float(level):.0%} band over {n} spectrum draws" if level is not None else ""
-    sub += f"; zeta = {zeta:.4g}, the whole band" if zeta is not None else ""
+    sub += f"; {_where(results, zeta)}" if zeta is not None else ""
     sub += f"\n({', '.join(sorted(notes))})" if notes else ""
     ax.set_title(f"{title}\n{sub}", fontsize=9.5)
     ax.grid(True, which="both" if logy else "major", alpha=0.3)
@@ -87,13 +98,14 @@ def figure_band_stress(results):
     bands, contact = results["base"]["bands"], results["base"]["contact"]
     band, nominal = bands["stress_distribution_band"], contact["stress_distribution"].isel(draw=0, drop=True)
     area = contact["contact_area_ratio"].isel(draw=0, drop=True)
+    zeta = None
     if "zeta" in band.dims:
         zeta = float(band["zeta"].max())
         band, nominal, area = band.sel(zeta=zeta), nominal.sel(zeta=zeta), area.sel(zeta=zeta)
     band, notes = _reduce(band, ("quantile", "p", "stress_level"))
     nominal, _ = _reduce(nominal, ("p", "stress_level"))
     area, _ = _reduce(area, ("p",))
-    picks = sorted({int(abs(area - a).argmin()) for a in (0.05, 0.2, 0.5)})
+    picks = sorted({int(np.argmin(np.abs(area.values - a))) for a in (0.05, 0.2, 0.5)})
     fig, ax = plt.subplots(figsize=(6.2, 4.4))
     for i in picks:
         d, b = nominal.isel(p=i), band.isel(p=i)
@@ -107,7 +119,7 @@ def figure_band_stress(results):
     ax.set_ylabel("P(sigma) (1/MPa)")
     level, n = bands.attrs.get("level", 0.9), bands.attrs.get("draws")
     ax.set_title(f"Stress distribution with its uncertainty band\nshaded: {float(level):.0%} band over {n} spectrum "
-                 "draws; the whole band" + (f"\n({', '.join(notes)})" if notes else ""), fontsize=9.5)
+                 f"draws; {_where(results, zeta)}" + (f"\n({', '.join(notes)})" if notes else ""), fontsize=9.5)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
@@ -121,7 +133,7 @@ def figure_band_separation(results):
 
 def figure_band_friction(results):
     return _figure(results, "friction", "friction_coefficient", "v", "sliding velocity v (m/s)",
-                   "friction coefficient mu", "Hysteretic friction with its uncertainty band")
+                   "friction coefficient mu", "Hysteretic friction with its uncertainty band", logy=True)
 
 
 def figure_band_psd(results):
