@@ -53,13 +53,19 @@ def _series(results, stage: str, var: str, xdim: str):
 
 
 def _figure(results, stage, var, xdim, xlabel, ylabel, title, scale=1.0, logy=False):
+    """The curves from the measured spectra with their bands (top) and the bands relative to
+    the curves, in percent (bottom: the width is readable there whatever the axes)."""
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(6.2, 4.4))
+    fig, (ax, rel) = plt.subplots(2, 1, figsize=(6.2, 5.6), sharex=True, gridspec_kw={"height_ratios": [3, 1.3]})
     notes, level, zeta, n = set(), None, None, None
     for label, x, y, lo, hi, extra in _series(results, stage, var, xdim):
         line, = ax.plot(x, y * scale, "-", lw=1.5, label=label)
         ax.fill_between(x, lo * scale, hi * scale, color=line.get_color(), alpha=0.25, lw=0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ok = y > 0
+            rel.fill_between(x[ok], 100 * (lo[ok] / y[ok] - 1), 100 * (hi[ok] / y[ok] - 1), color=line.get_color(),
+                             alpha=0.35, lw=0)
         notes.update(extra)
     for res in results.values():
         if "bands" in res:
@@ -70,13 +76,16 @@ def _figure(results, stage, var, xdim, xlabel, ylabel, title, scale=1.0, logy=Fa
     ax.set_xscale("log")
     if logy:
         ax.set_yscale("log")
-    ax.set_xlabel(xlabel)
+    rel.axhline(0.0, color="k", lw=0.6)
+    rel.set_xlabel(xlabel)
+    rel.set_ylabel("band / curve - 1 (%)")
     ax.set_ylabel(ylabel)
     sub = f"shaded: {float(level):.0%} band over {n} spectrum draws" if level is not None else ""
     sub += f"; {_where(results, zeta)}" if zeta is not None else ""
     sub += f"\n({', '.join(sorted(notes))})" if notes else ""
     ax.set_title(f"{title}\n{sub}", fontsize=9.5)
-    ax.grid(True, which="both" if logy else "major", alpha=0.3)
+    for a in (ax, rel):
+        a.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
     return fig
