@@ -152,16 +152,9 @@ CONTAINER_PARAMS = (
     Param("container", "path", doc="contact.engineering container (ZIP with the measurements and index.json / meta.yml); "
           "units, sizes, height scale, detrending and reliability cutoffs come from its metadata"),
     Param("surface", "str", default=None, doc="which surface of the container (by name) when it holds several"),
-    Param("analysis", "choice", default="area", choices=("area", "profiles"),
-          doc="maps: 2D radial PSD ('area') or average of the line scans along x ('profiles'); line scans: always profiles"),
     Param("detrend", "choice", default=None, choices=tuple(DETREND_DEGREE),
           doc="polynomial removed before the FFT (default: the measurement's detrend_mode, else mean if periodic, else plane)"),
-    Param("window", "choice", default=None, choices=("hann", "none"),
-          doc="window against edge leakage (default: hann if not periodic, else none)"),
-    Param("hurst", "quantity", "", default=0.5, lo=0.0, hi=1.0, lo_open=True,
-          doc="Hurst exponent assumed in the line-scan -> isotropic PSD conversion"),
-    Param("extend", "choice", default="none", choices=("none", "power_law", "zero"),
-          doc="how the psd stage extends the merged PSD beyond its q range (none: error)"),
+    *(p for p in TOPOGRAPHY_PARAMS if p.name in ("analysis", "window", "hurst", "extend")),
 )
 
 

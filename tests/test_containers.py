@@ -220,6 +220,8 @@ def test_merged_psd_agrees_with_the_known_psd_within_its_stated_errors(tmp_path)
         ratio = res["psd_substrate_measured_spread"].values
         birge.append(ratio[np.isfinite(ratio) & ok])
     z, birge = np.concatenate(z), np.concatenate(birge)
+    print(f"{z.size} bins: mean z^2 = {np.mean(z * z):.3f}, mean z = {np.mean(z):+.3f} +- {1 / np.sqrt(z.size):.3f}, "
+          f"max |z| = {np.abs(z).max():.2f}; Birge ratio^2 over {birge.size} overlap bins: {np.mean(birge**2):.2f}")
     assert z.size > 150 and birge.size > 30
     assert 0.75 < np.mean(z * z) < 1.3, np.mean(z * z)
     assert abs(np.mean(z)) < 3.0 / np.sqrt(z.size)
