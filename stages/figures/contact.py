@@ -74,6 +74,7 @@ def figure_stress_distribution(results, zeta=4.0):
     axes[0][0].set_ylabel("P(sigma) E*")
     axes[0][-1].legend(fontsize=8)
     note = band_note(results, base)
-    fig.suptitle(f"Stress distribution, zeta = {zeta:g} (seed Fig. 4)" + (f"; {note}" if note else ""))
+    fig.suptitle(f"Stress distribution, zeta = {zeta:g} (seed Fig. 4)" + (f"\n{note}" if note else ""),
+                 fontsize=10 if note else None)
     fig.tight_layout()
     return fig
