@@ -24,6 +24,7 @@ from roughcontact.physics.separation import (
 from roughcontact.stage import (
     Figure,
     Param,
+    Preview,
     Section,
     Stage,
     StageInput,
@@ -35,7 +36,7 @@ from roughcontact.stage import (
 )
 
 from .figures.separation import figure_separation
-from .shared import E_STAR, MATERIAL_KEYS, e_star, zeta_values
+from .shared import E_STAR, MATERIAL_KEYS, e_star, zeta_preview, zeta_values
 
 register_section(
     Section(
@@ -73,6 +74,11 @@ def _checked_alpha(inp: StageInput) -> float:
     if np.any(~(np.atleast_1d(np.asarray(inp["load.p"], dtype=float)) > 0)):
         raise UserError("pressures must be > 0", key="load.p")
     return alpha
+
+
+def validate_separation(inp: StageInput) -> Preview:
+    """Before anything computes: the magnifications lie on the psd stage's q grid."""
+    return zeta_preview(inp, inp.upstream["psd"])
 
 
 def compute_separation(inp: StageInput) -> xr.Dataset:
@@ -131,14 +137,12 @@ def compute_separation(inp: StageInput) -> xr.Dataset:
 
 
 def _point_bytes(params, wanted, upstream) -> int:
-    """Working memory per sweep point: a few float64 temporaries over the quadrature nodes."""
-    if "psd" not in upstream:
+    """Working memory per sweep point: a few float64 temporaries over the quadrature nodes (about
+    order x (q nodes + depth x panels per decade); ``upstream`` holds results or previews)."""
+    if "psd" not in upstream or "q" not in upstream["psd"].sizes:
         return 512
-    q = upstream["psd"]["q"].values
-    zeta = params["contact.zeta"]
-    zetas = q / q[0] if isinstance(zeta, str) else np.atleast_1d(np.asarray(zeta, dtype=float))
-    nodes = separation_node_count(q, zetas * q[0], params["numerics.separation_panels_per_decade"],
-                                  params["numerics.separation_gauss_points"], float(params["numerics.separation_depth"]))
+    panels = int(np.ceil(float(params["numerics.separation_depth"]) * params["numerics.separation_panels_per_decade"]))
+    nodes = (int(upstream["psd"].sizes["q"]) + panels + 1) * int(params["numerics.separation_gauss_points"])
     return 8 * 6 * nodes
 
 
@@ -160,6 +164,8 @@ STAGE = register(
         name="separation",
         version="1",
         compute=compute_separation,
+        validate=validate_separation,
+        unchunked=("zeta",),
         requires=("psd",),
         params=(*MATERIAL_KEYS, "load.p", "contact.zeta", "separation.alpha", "separation.refinement", *_NUMERICS),
         outputs={
