@@ -1,0 +1,71 @@
+"""The contact-area correction where other stages use a contact fraction: the separation
+stage's refinement "contact" (the correction's elastic-energy factor with its gamma) and the
+friction stage's P(q) (the same universal map of eq 31's argument)."""
+
+import numpy as np
+import pytest
+from scipy.special import erf
+
+from roughcontact.physics.contact import persson_G
+from roughcontact.physics.corrections import DEFAULT_GAMMA, corrected_area
+
+from conftest import make_scene
+from test_friction import _run, _scene
+
+
+@pytest.mark.parametrize("correction, refinement", [("persson", "none"), ("yang_persson", "yang_persson"),
+                                                    ("wang_mueser", "wang_mueser")])
+def test_separation_follows_the_contact_correction(run_scene, tmp_path, correction, refinement):
+    """refinement = "contact" is the same as naming the refinement with alpha = the correction's
+    gamma (persson: "none" with separation.alpha)."""
+    common = dict(outputs={"variables": ["mean_separation"]}, load={"p": ["10 MPa", "1 GPa", "10 GPa"]},
+                  interface={"eta": [0.0, -1.0]})
+    follow = make_scene(**common, contact={"zeta": [4.0, 200.0], "correction": correction},
+                        separation={"refinement": "contact", "alpha": 0.4})
+    alpha = 0.4 if correction == "persson" else DEFAULT_GAMMA[correction]
+    named = make_scene(**common, contact={"zeta": [4.0, 200.0]}, separation={"refinement": refinement, "alpha": alpha})
+    a = run_scene(follow, outdir=tmp_path / "a")["base"]["separation"]
+    b = run_scene(named, outdir=tmp_path / "b")["base"]["separation"]
+    np.testing.assert_allclose(a["mean_separation"], b["mean_separation"], rtol=1e-14)
+    assert a.attrs["separation_refinement"] == refinement and a.attrs["separation_alpha"] == pytest.approx(alpha)
+
+
+def test_refinements_order_the_separation(run_scene):
+    """With their published gammas both refinements raise u over eq 57 at alpha = 0.45 at small
+    load (S(0) >= 0.45 and the extra terms are positive there) and all meet at high load."""
+    p = ["1 MPa", "100 MPa", "10 GPa", "200 GPa"]
+    out = {}
+    for refinement, alpha in (("none", 0.45), ("yang_persson", 0.45), ("wang_mueser", 5 / 9)):
+        sc = make_scene(outputs={"variables": ["mean_separation"]}, load={"p": p}, interface={"eta": [0.0]},
+                        contact={"zeta": [200.0]}, separation={"refinement": refinement, "alpha": alpha})
+        out[refinement] = run_scene(sc)["base"]["separation"]["mean_separation"].values.ravel()
+    assert np.all(out["yang_persson"][:2] > out["none"][:2]) and np.all(out["wang_mueser"][:2] > out["none"][:2])
+    assert np.all(np.diff(out["wang_mueser"]) < 0) and np.all(out["wang_mueser"] > 0)
+
+
+def test_friction_area_uses_the_contact_correction_in_the_elastic_limit(tmp_path):
+    """A real constant modulus: the sliding contact fraction is the corrected A/A0 of the
+    contact theory, corrected_area(1/(2 sqrt(G / sigma0^2))), at every velocity; mu stays 0."""
+    for correction in ("yang_persson", "wang_mueser"):
+        raw = _scene(**{"modulus": {"kind": "elastic", "E": "7 MPa"}, "contact.correction": correction,
+                        "outputs.variables": ["friction_coefficient"]})
+        res = _run(raw, tmp_path / correction)
+        fric, psd = res["friction"], res["psd"]
+        assert np.all(fric["friction_coefficient"].values == 0.0)
+        q = psd["q"].values
+        G = persson_G(q, psd["psd_combined"].values, q[-1:], 7e6 / (1 - 0.25))[-1] / 0.4e6**2
+        expected = corrected_area(0.5 / np.sqrt(G), correction, DEFAULT_GAMMA[correction])
+        area = fric["sliding_contact_area_ratio"].values
+        np.testing.assert_allclose(area, expected, rtol=1e-12)
+        assert np.all(area > erf(0.5 / np.sqrt(G)))
+        assert fric["sliding_contact_area_ratio"].attrs["area_correction"] == correction
+
+
+def test_friction_with_a_corrected_area_has_more_contact_and_more_friction(tmp_path):
+    """A larger contact fraction at every scale puts more of the spectrum in contact: mu and
+    A/A0 rise over the plain theory at every velocity."""
+    plain = _run(_scene(**{"outputs.variables": ["friction_coefficient"]}), tmp_path / "plain")["friction"]
+    corr = _run(_scene(**{"contact.correction": "yang_persson", "outputs.variables": ["friction_coefficient"]}),
+                tmp_path / "yp")["friction"]
+    assert np.all(corr["sliding_contact_area_ratio"].values > plain["sliding_contact_area_ratio"].values)
+    assert np.all(corr["friction_coefficient"].values > plain["friction_coefficient"].values)
