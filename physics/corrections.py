@@ -231,3 +231,57 @@ def corrected_area(x0, correction: str, gamma):
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         v = reduced_variance(np.where(x0 > 0, 0.5 / (x0 * x0), np.inf), correction, gamma)
         return np.where(x0 > 0, erf(1.0 / np.sqrt(2.0 * v)), 0.0)
+
+
+#: the theory variants set against exact numerics: the contact correction and, for the mean
+#: separation, the elastic-energy refinement of eq 57 that goes with it (persson: eq 57 with a
+#: constant alpha; the others: their S(P) in the energy, alpha = the correction's gamma)
+VARIANTS = {"persson": "none", "yang_persson": "yang_persson", "wang_mueser": "wang_mueser"}
+
+
+def variant_theory(q, C, q_upper, p, E_star, variant: str, gamma=None, alpha=0.45, numerics=None):
+    """A/A0 and the mean separation u of one theory variant at one magnification.
+
+    Parameters
+    ----------
+    q : array (n,)
+        Wavenumber grid (1/m), q[0] = qL.
+    C : array (n,)
+        Combined PSD (m^4).
+    q_upper : float
+        zeta qL (1/m), within the grid.
+    p : array (k,)
+        Nominal pressures (Pa), > 0.
+    E_star : float
+        Effective modulus (Pa).
+    variant : {"persson", "yang_persson", "wang_mueser"}
+        See :data:`VARIANTS`.
+    gamma : float, optional
+        The correction's gamma (default :data:`DEFAULT_GAMMA`); also alpha of its energy factor.
+    alpha : float
+        Persson's alpha of eq 57 for the ``persson`` variant.
+    numerics : dict, optional
+        ``panels_per_decade``, ``order``, ``depth`` of
+        :func:`roughcontact.physics.separation.separation_nodes`.
+
+    Returns
+    -------
+    (area, u) : arrays (k,)
+        Dimensionless and m.
+
+    References
+    ----------
+    docs/theory.md, sections "Contact-area corrections" and "Separation".
+    """
+    from .contact import contact_area_ratio, persson_G
+    from .separation import mean_separation, separation_nodes
+
+    gamma = DEFAULT_GAMMA[variant] if gamma is None else gamma
+    p = np.atleast_1d(np.asarray(p, dtype=float))
+    upper = np.atleast_1d(float(q_upper))
+    G = float(persson_G(q, C, upper, E_star)[0])
+    area = contact_area_ratio(p, corrected_G(p, G, variant, gamma))
+    s, weight, count, _, s_tail, q_tail = separation_nodes(q, C, upper, **(numerics or {}))
+    u = mean_separation(p, s, weight, count, s_tail, q_tail, E_star=E_star,
+                        alpha=alpha if variant == "persson" else gamma, refinement=VARIANTS[variant])
+    return area, u[:, 0]

@@ -69,3 +69,30 @@ def test_friction_with_a_corrected_area_has_more_contact_and_more_friction(tmp_p
                 tmp_path / "yp")["friction"]
     assert np.all(corr["sliding_contact_area_ratio"].values > plain["sliding_contact_area_ratio"].values)
     assert np.all(corr["friction_coefficient"].values > plain["friction_coefficient"].values)
+
+
+def test_bem_shows_every_variant_and_reads_the_scene_choice(run_scene, tmp_path):
+    """The bem stage puts every variant next to eq 19 at the BEM's magnification: persson is the
+    contact/separation stages' default result, each correction raises A/A0 over it at small
+    load, and with contact.correction the stage's own theory is that variant."""
+    pytest.importorskip("tamaas")
+    from test_bem import bem_scene
+
+    plain = run_scene(bem_scene(), outdir=tmp_path / "plain")["base"]["bem"]
+    assert list(plain["theory"].values) == ["persson", "yang_persson", "wang_mueser"]
+    area = plain["theory_variant_contact_area_ratio"]
+    np.testing.assert_allclose(area.sel(theory="persson"), plain["theory_contact_area_ratio"], rtol=1e-12)
+    np.testing.assert_allclose(plain["theory_variant_mean_separation"].sel(theory="persson"),
+                               plain["theory_mean_separation"], rtol=1e-10)
+    rough = area.sel(eta=[0.0, -1.0]).isel(p=0)
+    assert np.all(rough.sel(theory="yang_persson") > 1.3 * rough.sel(theory="persson"))
+    assert np.all(rough.sel(theory="wang_mueser") > 1.25 * rough.sel(theory="persson"))
+    np.testing.assert_allclose(plain["area_ratio_variant_to_bem"],
+                               area / plain["bem_contact_area_ratio_mean"], rtol=1e-12)
+    assert "gamma = 0.45" in plain.attrs["theory_variants"]
+    chosen = run_scene(bem_scene(contact={"zeta": [16.0], "correction": "yang_persson"},
+                                 separation={"refinement": "contact"}), outdir=tmp_path / "yp")["base"]["bem"]
+    np.testing.assert_allclose(chosen["theory_contact_area_ratio"],
+                               chosen["theory_variant_contact_area_ratio"].sel(theory="yang_persson"), rtol=1e-12)
+    np.testing.assert_allclose(chosen["theory_mean_separation"],
+                               chosen["theory_variant_mean_separation"].sel(theory="yang_persson"), rtol=1e-10)
