@@ -24,7 +24,7 @@ from roughcontact.stage import (
     Figure, Param, Section, Stage, StageInput, UserError, Var, register, register_params, register_section,
 )
 
-from .figures.bem import figure_bem_comparison
+from .figures.bem import figure_bem_comparison, figure_bem_reduced_pressure
 from .maps import check_eta, map_band, map_surfaces, measured_maps, topography_files
 from .shared import E_STAR, MATERIAL_KEYS, e_star
 from .variants import VARIANT_KEYS, VARIANTS, theory_variants, variant_attrs
@@ -345,7 +345,9 @@ register(
             "bem_sigma": Var("Pa", "local contact pressure at each histogram bin centre"),
         },
         figures=(Figure("bem_comparison", "theory vs BEM: A/A0, mean separation and their ratios",
-                        ("bem",), figure_bem_comparison),),
+                        ("bem",), figure_bem_comparison),
+                 Figure("bem_reduced_pressure", "theory / BEM ratios of every variant against p/(E* g)",
+                        ("bem",), figure_bem_reduced_pressure)),
         doc="Exact FFT-BEM contact (tamaas) on synthesized or measured surface pairs, compared with the theory at the same band.",
     )
 )

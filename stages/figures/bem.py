@@ -91,3 +91,48 @@ def figure_bem_comparison(results):
                          color=color, markersize=4, capsize=2)
     _decorate(fig, axes, ds, measured, zeta_bem, grid)
     return fig
+
+
+def reduced_pressure(ds):
+    """p / (E* g) over (p, eta): g the BEM composite's rms slope (mean over realizations), the
+    unit in which contact barely depends on the spectrum (docs/bem.md, "The separation ratio")."""
+    g = ds["bem_rms_slope_combined"].mean("realization")
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return ds["p"] / (ds["E_star"] * g)
+
+
+def figure_bem_reduced_pressure(results):
+    """Each variant's theory / BEM ratios of A/A0 and of the mean separation against the
+    reduced pressure p / (E* g) (the rough pairs only)."""
+    import matplotlib.pyplot as plt
+
+    ds = results["base"]["bem"]
+    measured = ds.attrs.get("bem_surfaces") == "measured"
+    if "eta" not in ds.dims:
+        ds = ds.expand_dims(eta=[np.nan])
+    if "p" not in ds.dims:
+        ds = ds.expand_dims("p")
+    fig, axes = plt.subplots(1, 2, figsize=(11.0, 4.2))
+    x_all = reduced_pressure(ds)
+    for k, eta in enumerate(ds["eta"].values):
+        d = ds.isel(eta=k)
+        if np.all(np.asarray(d["bem_hrms_combined"].values) == 0):
+            continue  # h1 = h2: no roughness, no reduced pressure
+        x = x_all.isel(eta=k).values
+        label = _label(d, eta, measured)
+        names = list(d["theory"].values) if "theory" in d.dims else []
+        for name in names:
+            v = d.sel(theory=name)
+            style = _STYLES.get(str(name), "-.")
+            for ax, var in ((axes[0], "area_ratio_variant_to_bem"), (axes[1], "separation_ratio_variant_to_bem")):
+                ax.semilogx(x, v[var], style, marker="o", color=f"C{k}", markersize=3, label=f"{name}, {label}")
+    for ax, what in ((axes[0], "A/A0"), (axes[1], "mean separation u")):
+        ax.axhline(1.0, color="0.5", linewidth=0.8)
+        ax.set_xlabel("p / (E* g), g = rms slope of the BEM composite")
+        ax.set_ylabel(f"{what}: theory / BEM")
+        ax.grid(alpha=0.3)
+        ax.set_ylim(0, max(1.5, min(ax.get_ylim()[1], 3.0)))
+    axes[1].legend(fontsize=7, ncol=2)
+    fig.suptitle("Theory / BEM against the reduced pressure (- eq 19/57, -- Yang-Persson, : Wang-Mueser)")
+    fig.tight_layout()
+    return fig
