@@ -70,12 +70,10 @@ def compute_validation_bem(inp: StageInput) -> xr.Dataset:
     hurst = inp.sweep("hurst", inp["validation.hurst"])
     band = inp.sweep("bandwidth", inp["validation.bandwidth"])
     eta = inp.sweep("eta", inp["interface.eta"])
-    n_w = inp.sweep("pixels_per_wavelength", inp["validation.pixels_per_wavelength"])
     p_red = inp.sweep("reduced_pressure", np.sort(np.atleast_1d(inp["validation.reduced_pressure"])))
     R = int(inp["validation.realizations"])
     realization = xr.DataArray(np.arange(R), dims=("realization",), coords={"realization": np.arange(R)}).chunk(1)
-    # rungs beyond max_grid are not solved: their n_w is set to NaN, and the task returns NaN
-    n_w = n_w.where(n_w * band <= inp["validation.max_grid"])
+    n_w = _rungs(inp)
     out = xr.apply_ufunc(
         bem_block, hurst, band, eta, realization, n_w, p_red,
         kwargs=dict(**case_kwargs(inp), seed=int(inp["validation.seed"]), tolerance=float(inp["numerics.bem_tolerance"]),
@@ -94,6 +92,18 @@ def compute_validation_bem(inp: StageInput) -> xr.Dataset:
                                              "hrms as the attributes say; noise from (seed, realization, bandwidth): the "
                                              "same surfaces on every rung, for every H and eta"})
     return ds
+
+
+def _rungs(inp: StageInput) -> xr.DataArray:
+    """Pixels per wavelength per (bandwidth, rung), NaN where the grid would exceed max_grid
+    (those tasks are not solved); built from the scene's values, one chunk per task."""
+    arrays = {}
+    for key, dim in (("pixels_per_wavelength", "pixels_per_wavelength"), ("bandwidth", "bandwidth")):
+        v = np.asarray(inp[f"validation.{key}"], dtype=float)
+        arrays[dim] = xr.DataArray(v, dims=(dim,), coords={dim: v}) if v.ndim else xr.DataArray(v)
+    n_w = arrays["pixels_per_wavelength"].where(arrays["pixels_per_wavelength"] * arrays["bandwidth"]
+                                                <= inp["validation.max_grid"])
+    return n_w.chunk({d: 1 for d in n_w.dims}) if n_w.dims else n_w
 
 
 def _task_bytes(params, wanted, upstream) -> int:
