@@ -38,8 +38,10 @@ import functools
 import numpy as np
 from scipy.special import erf
 
+from .contact import contact_area_ratio, persson_G
 from .quadrature import gauss_legendre_panels
 from .roots import illinois
+from .separation import mean_separation, separation_nodes
 
 #: the corrections by name, with what each one means
 CORRECTIONS = {
@@ -273,9 +275,6 @@ def variant_theory(q, C, q_upper, p, E_star, variant: str, gamma=None, alpha=0.4
     ----------
     docs/theory.md, sections "Contact-area corrections" and "Separation".
     """
-    from .contact import contact_area_ratio, persson_G
-    from .separation import mean_separation, separation_nodes
-
     gamma = DEFAULT_GAMMA[variant] if gamma is None else gamma
     p = np.atleast_1d(np.asarray(p, dtype=float))
     upper = np.atleast_1d(float(q_upper))
