@@ -28,13 +28,14 @@ import numpy as np
 from scipy.special import erf
 
 from .corrections import corrected_area
+from .inputs import require_pressure
 from .quadrature import cumulative_integral, gauss_legendre, running_weighted_integral
 from .viscoelastic import modulus_at
 
 
 def _k(sigma0, nu):
     """k = 1 / ((1 - nu^2) sigma0) (1/Pa)."""
-    return 1.0 / ((1.0 - nu * nu) * np.asarray(sigma0, dtype=float))
+    return 1.0 / ((1.0 - nu * nu) * require_pressure(sigma0, "sigma0", positive=True))
 
 
 def angular_integrals(q, v, omega_grid, storage, loss, n_phi):

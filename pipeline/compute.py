@@ -20,10 +20,10 @@ import time
 from typing import Iterator, Mapping
 
 import dask
-import netCDF4
 import numpy as np
 import xarray as xr
 
+from . import ncio
 from .errors import UserError
 
 
@@ -120,7 +120,7 @@ def dask_variables(ds: xr.Dataset) -> list[str]:
 
 
 def write_blocks(path, ds: xr.Dataset, names: list[str], compute_with, progress_stream=sys.stderr,
-                 in_flight: int | None = None) -> None:
+                 in_flight: int | None = None, checksums=None) -> None:
     """Compute the dask variables ``names`` of ``ds`` block by block and write them into the
     existing NetCDF file ``path`` (whose other variables are already written).
 
@@ -137,10 +137,11 @@ def write_blocks(path, ds: xr.Dataset, names: list[str], compute_with, progress_
     if in_flight is None:
         workers = len(client.scheduler_info()["workers"]) if client is not None else (dask.system.CPU_COUNT or 2)
         in_flight = max(2, 2 * workers)
-    with netCDF4.Dataset(path, "a") as nc:
+    with ncio.dataset(path, "a") as nc:  # every call into netCDF/HDF5 under the process-wide lock (ncio)
         for (dims, chunks), group in groups.items():
             offsets = [np.concatenate([[0], np.cumsum(c)]) for c in chunks]
-            targets = [nc.variables[name] for name in group]
+            with ncio.locked():
+                targets = [nc.variables[name] for name in group]
             arrays = [ds[name].data for name in group]
             indices = itertools.product(*(range(len(c)) for c in chunks))
 
@@ -159,6 +160,10 @@ def write_blocks(path, ds: xr.Dataset, names: list[str], compute_with, progress_
                     results = dask.compute(*tasks, scheduler=compute_with)
                 for idx, values in zip(batch, results):
                     sl = region(idx)
-                    for target, value in zip(targets, values):
-                        target[sl] = np.asarray(value)
+                    with ncio.locked():
+                        for target, value in zip(targets, values):
+                            target[sl] = np.asarray(value)
+                    if checksums is not None:
+                        for name, value in zip(group, values):
+                            checksums.add(name, np.asarray(value), [s.start for s in sl])
                     bar.advance()

@@ -24,6 +24,7 @@ from roughcontact.physics.separation import (
 from roughcontact.stage import (
     Figure,
     Param,
+    Preview,
     Section,
     Stage,
     StageInput,
@@ -35,7 +36,7 @@ from roughcontact.stage import (
 )
 
 from .figures.separation import figure_separation
-from .shared import CORRECTION_KEYS, E_STAR, MATERIAL_KEYS, area_correction, e_star, zeta_values
+from .shared import CORRECTION_KEYS, E_STAR, MATERIAL_KEYS, area_correction, e_star, zeta_preview, zeta_values
 
 register_section(
     Section(
@@ -86,6 +87,14 @@ def separation_variant(inp: StageInput) -> tuple[float, str]:
         return alpha, refinement
     name, gamma = area_correction(inp)
     return (alpha, "none") if name == "persson" else (gamma, name)
+
+
+def validate_separation(inp: StageInput) -> Preview:
+    """Before anything computes: the magnifications lie on the psd stage's q grid (and, with
+    refinement "contact", the contact correction's gamma is usable)."""
+    if inp["separation.refinement"] == "contact":
+        area_correction(inp)
+    return zeta_preview(inp, inp.upstream["psd"])
 
 
 def compute_separation(inp: StageInput) -> xr.Dataset:
@@ -162,6 +171,8 @@ register(
         name="separation",
         version="1",
         compute=compute_separation,
+        validate=validate_separation,
+        unchunked=("zeta",),
         requires=("psd",),
         params=(*MATERIAL_KEYS, "load.p", "contact.zeta", "separation.alpha", "separation.refinement", *_NUMERICS,
                 *CORRECTION_KEYS),

@@ -67,9 +67,9 @@ def _validate(inp: StageInput) -> None:
 
 
 def compute_validation_bem(inp: StageInput) -> xr.Dataset:
-    hurst = inp.sweep("hurst", inp["validation.hurst"])
-    band = inp.sweep("bandwidth", inp["validation.bandwidth"])
-    eta = inp.sweep("eta", inp["interface.eta"])
+    # one task per block, whatever the engine's memory-based chunks: every task is a whole BEM solve
+    hurst, band, eta = (_one_per_block(inp.sweep(dim, inp[key])) for dim, key in
+                        (("hurst", "validation.hurst"), ("bandwidth", "validation.bandwidth"), ("eta", "interface.eta")))
     p_red = inp.sweep("reduced_pressure", np.sort(np.atleast_1d(inp["validation.reduced_pressure"])))
     R = int(inp["validation.realizations"])
     realization = xr.DataArray(np.arange(R), dims=("realization",), coords={"realization": np.arange(R)}).chunk(1)
@@ -106,9 +106,15 @@ def _rungs(inp: StageInput) -> xr.DataArray:
     return n_w.chunk({d: 1 for d in n_w.dims}) if n_w.dims else n_w
 
 
+def _one_per_block(da: xr.DataArray) -> xr.DataArray:
+    return da.chunk({d: 1 for d in da.dims}) if da.dims else da
+
+
 def _task_bytes(params, wanted, upstream) -> int:
-    """Each task is a whole BEM solve: one block per task (the budget never holds two)."""
-    return 2**50
+    """Working memory per load of a task: the solver's fields, about 200 bytes per pixel of the
+    largest map (docs/bem.md: ~150 measured), shared by the task's loads."""
+    loads = max(np.size(params["validation.reduced_pressure"]), 1)
+    return int(200 * params["validation.max_grid"] ** 2 / loads) + 64
 
 
 _DIMS = "(hurst, bandwidth, eta, realization, pixels_per_wavelength, reduced_pressure)"

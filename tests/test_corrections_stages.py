@@ -96,3 +96,24 @@ def test_bem_shows_every_variant_and_reads_the_scene_choice(run_scene, tmp_path)
                                chosen["theory_variant_contact_area_ratio"].sel(theory="yang_persson"), rtol=1e-12)
     np.testing.assert_allclose(chosen["theory_mean_separation"],
                                chosen["theory_variant_mean_separation"].sel(theory="yang_persson"), rtol=1e-10)
+
+
+def test_flash_temperature_uses_the_corrected_contact_fraction():
+    """With infinite conductivity the flash march is the isothermal theory, also with a
+    contact-area correction: the same mu and A/A0 as the isothermal kernel with that correction,
+    and more contact than without it."""
+    from roughcontact.physics import flash, friction as fr
+    from test_flash import BOX_TREAD, NU, SIGMA0, _material, _psd
+
+    q, C = _psd()
+    v = np.geomspace(1e-6, 1e2, 5)
+    grid, Ep, Epp, shift = _material(BOX_TREAD, 298.15, 230.25)
+    A, B = fr.angular_integrals(q, v, grid, Ep, Epp, 16)
+    area = ("yang_persson", 0.45)
+    mu0, a0 = fr.friction_kernel(q, C, A, B, np.asarray(SIGMA0), NU, "none", 0.5, False, 12, *area)
+    mu, a, _ = flash.flash_friction_kernel(q, C, v, 298.15, grid, Ep, Epp, 16, SIGMA0, NU, np.inf, np.inf, shift,
+                                           area=area)
+    np.testing.assert_allclose(mu, mu0, rtol=1e-6)
+    np.testing.assert_allclose(a, a0, rtol=1e-6)
+    _, plain = fr.friction_kernel(q, C, A, B, np.asarray(SIGMA0), NU)
+    assert np.all(a > plain)
