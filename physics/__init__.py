@@ -11,6 +11,7 @@ quadrature   the one quadrature of the project (piecewise power-law integrals on
 roots        the one bracketing root finder
 spectra      self-affine PSDs, the combined PSD of two surfaces, PSD conventions
 contact      G(zeta), A/A0, P(sigma) (non-adhesive contact)
+corrections  contact-area corrections (Yang-Persson, Wang-Mueser): the variance ODE solved exactly; theory variants
 separation   mean interfacial separation u(p)
 adhesion     full-contact adhesion (effective surface energy)
 volterra     partial-contact adhesion (the marching Volterra solver)
@@ -24,4 +25,5 @@ uncertainty  errors of measured spectra on the grid, spectra drawn within them, 
 preprocessing  detrending, windows and the tip-radius cutoff of measured scans
 synthesis    random periodic surface pairs with given spectra and coherence; band limit of a map
 bem          the exact FFT boundary-element contact solve (tamaas, optional)
+validation   the validation's BEM tasks, Richardson extrapolation of the area, lattice moments, deviations
 """

@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from roughcontact.physics.contact import effective_modulus
+from roughcontact.physics.corrections import CORRECTIONS, DEFAULT_GAMMA, check_gamma
 from roughcontact.physics.spectra import CONVENTIONS
 from roughcontact.stage import Param, Preview, Section, UserError, Var, register_coords, register_params, register_section
 
@@ -231,6 +232,32 @@ register_section(
         doc="the magnifications at which contact and separation are computed",
     )
 )
+#: the contact-area correction (docs/theory.md, "Contact-area corrections"); read by contact,
+#: separation (refinement "contact"), friction and bem
+register_params(
+    "contact",
+    Param("correction", "choice", default="persson", choices=tuple(CORRECTIONS),
+          doc="contact-area theory: persson (eq 19, the seed), yang_persson (S = gamma + (1 - gamma) (A/A0)^2) "
+              "or wang_mueser (S = gamma - (2/9) (A/A0)^2 + (11/9 - gamma) (A/A0)^4): dV = S dV_full along zeta"),
+    Param("gamma", "quantity", "", default=None, lo=0.0, hi=1.0, lo_open=True,
+          doc="gamma of the correction (default: the published value, 0.45 yang_persson, 5/9 wang_mueser)"),
+)
+CORRECTION_KEYS = ("contact.correction", "contact.gamma")
+
+
+def area_correction(inp) -> tuple[str, float | None]:
+    """The scene's contact-area correction and its gamma (the published one unless given),
+    checked: S(A/A0) > 0 on [0, 1]."""
+    name = inp["contact.correction"]
+    gamma = inp["contact.gamma"]
+    gamma = DEFAULT_GAMMA[name] if gamma is None else float(gamma)
+    try:
+        check_gamma(name, gamma)
+    except ValueError as exc:
+        raise UserError(str(exc), key="contact.gamma") from None
+    return name, (None if name == "persson" else gamma)
+
+
 register_section(
     Section(
         "grid",
