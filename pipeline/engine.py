@@ -268,6 +268,8 @@ def run(scene: Scene, outdir: Path, targets: Iterable[str] | None = None, force:
 
 
 def _run(scene, outdir, targets, force, report, compute_with, verify=None):
+    from .compute import chunk_sweeps
+
     plans = plan(scene, outdir, targets, force, verify)
     scenes = {"base": scene, **scene.variants}
     store.clean_temporaries(outdir)
@@ -288,13 +290,13 @@ def _run(scene, outdir, targets, force, report, compute_with, verify=None):
         report(f"{tag}: computing ({'; '.join(p.reasons)})")
         t0 = time.perf_counter()
         upstream = {up: results[p.variant][up] for up in p.record["upstream"]}
+        chunks = stage_chunks(scenes[p.variant], p.stage, p.params, p.wanted, {**upstream, **_own(previews, p)})
         inp = StageInput(
             params=p.params,
-            upstream=upstream,
+            upstream=chunk_sweeps(upstream, chunks),  # a sweep made upstream (eta, draw) splits this stage's work too
             files=files[i - 1],
             wanted=p.wanted,
-            chunks=stage_chunks(scenes[p.variant], p.stage, p.params, p.wanted,
-                                {**upstream, **_own(previews, p)}),
+            chunks=chunks,
             stage=p.stage.name,
         )
         with xr.set_options(keep_attrs=False):  # a variable's units come from its declaration, never by inheritance

@@ -271,7 +271,7 @@ def _vanishing(ds, psd, c0, c1, q, E_star, dg, nodes, K_min, tol, sigma0):
 # The stage
 # ----------------------------------------------------------------------------------------
 
-register(
+STAGE = register(
     Stage(
         name="adhesion",
         version="1",

@@ -7,7 +7,8 @@ import numpy as np
 
 from roughcontact.stage import UserError
 
-from .common import eta_label, legend_outside, line_style, q_reference, style, wavenumber
+from .common import (DEFAULT_LEVEL, band_level, band_note, draw_band, eta_label, legend_outside, line_style, nominal,
+                     q_reference, style, wavenumber)
 
 _ANGSTROM = 1e-10
 
@@ -18,10 +19,12 @@ def _per_model(ds):
     return [(str(ds["model"].values) if "model" in ds.coords else "", ds)]
 
 
-def _curve(ax_a, ax_b, ds, label, kind, full=False):
+def _curve(ax_a, ax_b, ds, label, kind, full=False, level=DEFAULT_LEVEL):
     """gamma_eff/Delta_gamma on ax_a and A/A0 on ax_b against the substrate hrms, closed at the
     vanishing hrms (a dotted line of the case's colour, its value in the legend) when the dataset
-    has it. ``kind`` is the case (:data:`CASE_STYLES`) that sets colour, marker and line."""
+    has it. ``kind`` is the case (:data:`CASE_STYLES`) that sets colour, marker and line. With
+    spectrum draws, the measured spectrum's curve and the band of the draws shaded."""
+    draws, ds = ds, nominal(ds)
     if "hrms_substrate" not in ds.dims:
         raise UserError("the adhesion figures need substrate.hrms as a sweep", key="substrate.hrms")
     h = ds["hrms_substrate"].values / _ANGSTROM
@@ -39,6 +42,10 @@ def _curve(ax_a, ax_b, ds, label, kind, full=False):
     kw = dict(line_style(kind, hp.size, markers=10), label=label)
     ax_a.plot(hp, gp, **kw)
     ax_b.plot(hp, Ap, **kw)
+    for ax, var, scale in ((ax_a, "gamma_eff_macroscopic", dg), (ax_b, "adhesive_contact_area_ratio", 1.0)):
+        band = draw_band(draws[var], level)
+        if band is not None:
+            ax.fill_between(h, band[0] / scale, band[1] / scale, color=style(kind)["color"], alpha=0.22, lw=0)
     if full:
         ax_a.plot(h, ds["gamma_eff_full_contact"].values / dg, color=style(kind)["color"], linestyle=(0, (6, 2, 1, 2)),
                   linewidth=1.0, label="full contact")
@@ -60,8 +67,9 @@ def _axes(title):
 
 
 def _title(results, variant, what):
-    qL = q_reference(results, variant)
-    return f"{what}: zero load, magnification from qL = {wavenumber(qL)} up to the surfaces' q1" if qL else what
+    qL, note = q_reference(results, variant), band_note(results, results[variant]["adhesion"])
+    title = f"{what}: zero load, magnification from qL = {wavenumber(qL)} up to the surfaces' q1" if qL else what
+    return title + (f"; {note}" if note else "")
 
 
 def figure_one_surface(results):
@@ -73,7 +81,7 @@ def figure_one_surface(results):
     fig, ax_a, ax_b = _axes(_title(results, variant, "One rough surface (seed Fig. 1)"))
     for k, (label, d) in enumerate(_per_model(ds)):
         _curve(ax_a, ax_b, d, f"partial contact, {label} model" if label else "partial contact", "substrate only",
-               full=(k == 0))
+               full=(k == 0), level=band_level(results))
     top = float(ds["gamma_eff_full_contact"].max() / ds["delta_gamma"])
     ax_a.set_ylim(0, max(1.02, 1.05 * top))
     return legend_outside(fig, [ax_a], below=True)
@@ -87,9 +95,9 @@ def figure_two_surfaces(results):
         suffix = f" ({label})" if "model" in ds.dims else ""
         if "eta" in d.dims:
             for e in d["eta"].values:
-                _curve(ax_a, ax_b, d.sel(eta=e), eta_label(e) + suffix, eta_label(e))
+                _curve(ax_a, ax_b, d.sel(eta=e), eta_label(e) + suffix, eta_label(e), level=band_level(results))
         else:
-            _curve(ax_a, ax_b, d, f"pair{suffix}", "pair")
+            _curve(ax_a, ax_b, d, f"pair{suffix}", "pair", level=band_level(results))
     if "substrate_only" in results:
         for label, d in _per_model(results["substrate_only"]["adhesion"]):
             _curve(ax_a, ax_b, d, "substrate only" + (f" ({label})" if "model" in ds.dims else ""), "substrate only")

@@ -1,4 +1,8 @@
-"""Figure of the bem stage: theory against the exact BEM at the BEM's magnification."""
+"""Figures of the bem stage: theory (eq 19 / eq 57 and its corrections) against the exact BEM at
+the BEM's magnification, and the ratios against the reduced pressure p / (E* g).
+
+Colour and marker are the case's (:data:`~.common.CASE_STYLES`); the line style is the theory
+variant's (:data:`_STYLES`); one legend below the panels says both."""
 
 from __future__ import annotations
 
@@ -6,35 +10,70 @@ import numpy as np
 
 from .common import eta_label, style, wavenumber
 
+#: line style of each theory variant
+_STYLES = {"persson": "-", "yang_persson": "--", "wang_mueser": ":"}
+_VARIANTS = {"persson": "eq 19 / eq 57", "yang_persson": "Yang-Persson", "wang_mueser": "Wang-Mueser"}
+
 
 def _label(d, eta, measured):
-    label = ("pair, measured eta(q)" if measured else "pair") if np.isnan(eta) else eta_label(eta)
+    """(case, legend text) of one coherence of the BEM result."""
+    case = ("pair, measured eta(q)" if measured else "pair") if np.isnan(eta) else eta_label(eta)
     full = np.all(np.asarray(d["bem_hrms_combined"].values) == 0)
-    return label, label + (" (h1 = h2: full contact)" if full else "")
+    return case, case + (" (h1 = h2: full contact)" if full else "")
 
 
-def _legend(fig, cases):
-    """One legend below the panels: a colour per case, and what lines and markers mean."""
+def _prepared(results):
+    ds = results["base"]["bem"]
+    measured = ds.attrs.get("bem_surfaces") == "measured"
+    if "eta" not in ds.dims:
+        ds = ds.expand_dims(eta=[np.nan])
+    if "p" not in ds.dims:
+        ds = ds.expand_dims("p")
+    return ds, measured
+
+
+def _legend(fig, cases, variants, bem=True):
+    """One legend below the panels: a colour and marker per case, a line style per theory variant."""
     from matplotlib.lines import Line2D
 
-    handles = [Line2D([], [], color=s["color"], marker=s["marker"], linestyle="-", label=text) for text, s in cases]
-    handles += [Line2D([], [], color="0.2", linestyle="-", label="theory"),
-                Line2D([], [], color="0.2", marker="o", linestyle="none", label="BEM (+- 1 s.d.)"),
-                Line2D([], [], color="0.2", marker="o", linestyle="-", label="ratio A/A0"),
-                Line2D([], [], color="0.2", marker="o", markerfacecolor="white", linestyle="--", label="ratio u")]
-    fig.legend(handles=handles, loc="outside lower center", fontsize=8, ncol=min(len(handles), 8))
+    handles = [Line2D([], [], color=s["color"], marker=s["marker"], linestyle="none", label=text) for text, s in cases]
+    handles += [Line2D([], [], color="0.2", linestyle=_STYLES.get(v, "-."), label=f"theory: {_VARIANTS.get(v, v)}")
+                for v in variants]
+    if bem:
+        handles.append(Line2D([], [], color="0.2", marker="o", linestyle="none", markerfacecolor="white",
+                              label="BEM (+- 1 s.d. over realizations)"))
+    fig.legend(handles=handles, loc="outside lower center", fontsize=8, ncol=min(len(handles), 4))
+
+
+def _variant_lines(axes, x, d, s):
+    """Every theory variant: A/A0 and u (lines), and the ratios to the BEM (case markers)."""
+    names = [str(n) for n in d["theory"].values] if "theory" in d.dims else []
+    for name in names:
+        v = d.sel(theory=name)
+        line = _STYLES.get(name, "-.")
+        axes[0].loglog(x, v["theory_variant_contact_area_ratio"], line, color=s["color"])
+        axes[1].semilogx(x, v["theory_variant_mean_separation"] * 1e9, line, color=s["color"])
+        for ax, var in ((axes[2], "area_ratio_variant_to_bem"), (axes[3], "separation_ratio_variant_to_bem")):
+            if np.any(np.isfinite(v[var].values)):
+                ax.semilogx(x, v[var], line, marker=s["marker"], color=s["color"], markersize=4)
+    if not names:  # results written before the variants existed
+        axes[0].loglog(x, d["theory_contact_area_ratio"], "-", color=s["color"])
+        axes[1].semilogx(x, d["theory_mean_separation"] * 1e9, "-", color=s["color"])
+    return names or ["persson"]
 
 
 def _decorate(fig, axes, ds, measured, zeta_bem, grid, qL):
     axes[0].set_ylabel("A / A0")
-    axes[0].set_title("contact area: theory (lines), BEM (points)", fontsize=9)
+    axes[0].set_title("contact area: theory (lines), BEM (open markers)", fontsize=9)
     axes[1].set_ylabel("mean separation u (nm)")
     axes[1].set_ylim(bottom=0)
     axes[1].set_title("mean separation" + (" (one measured pair)" if measured else
                                            " (error bars: spread over realizations)"), fontsize=9)
-    axes[2].axhline(1.0, color="0.5", linewidth=0.8)
-    axes[2].set_ylabel("theory / BEM")
-    axes[2].set_title("ratios, same band on both sides", fontsize=9)
+    for ax, what in ((axes[2], "A/A0"), (axes[3], "u")):
+        ax.axhline(1.0, color="0.5", linewidth=0.8)
+        ax.set_ylabel(f"{what}: theory / BEM")
+        ax.set_title(f"{what}: theory / BEM per variant, same band on both sides", fontsize=9)
+        ax.set_ylim(0, max(1.5, min(ax.get_ylim()[1] * 1.1, 3.0)))
     for ax in axes:
         ax.set_xlabel("p / E*")
         ax.grid(alpha=0.3)
@@ -46,39 +85,73 @@ def _decorate(fig, axes, ds, measured, zeta_bem, grid, qL):
 
 
 def figure_bem_comparison(results):
-    """Theory (lines) against BEM (markers, +- one standard deviation over realizations) at the
-    BEM's magnification: A/A0 and mean separation against p/E*, and their theory/BEM ratios."""
+    """Theory (lines: eq 19 / eq 57 and every correction) against BEM (markers, +- one standard
+    deviation over realizations) at the BEM's magnification: A/A0 and mean separation against
+    p/E*, and each variant's theory/BEM ratios."""
     import matplotlib.pyplot as plt
 
-    ds = results["base"]["bem"]
-    E_star = float(ds["E_star"])
-    measured = ds.attrs.get("bem_surfaces") == "measured"
-    zeta_bem, grid = float(ds["bem_zeta"]), int(ds["bem_grid"])  # scalars, before eta/p are expanded
+    raw = results["base"]["bem"]
+    E_star = float(raw["E_star"])
+    zeta_bem, grid = float(raw["bem_zeta"]), int(raw["bem_grid"])  # scalars, before eta/p are expanded
+    ds, measured = _prepared(results)
     psd = results["base"].get("psd")
     qL = float(psd["q"].values[0]) if psd is not None else None
-    if "eta" not in ds.dims:
-        ds = ds.expand_dims(eta=[np.nan])
-    if "p" not in ds.dims:
-        ds = ds.expand_dims("p")
-    fig, axes = plt.subplots(1, 3, figsize=(15.0, 4.3), layout="constrained")
+    fig, axes = plt.subplots(2, 2, figsize=(12.0, 8.8), layout="constrained")
+    axes = axes.ravel()
     x = ds["p"].values / E_star
-    cases = []
+    cases, variants = [], []
     for k, eta in enumerate(ds["eta"].values):
         d = ds.isel(eta=k)
         case, text = _label(d, eta, measured)
         s = style(case)
         cases.append((text, s))
-        color = s["color"]
-        axes[0].loglog(x, d["theory_contact_area_ratio"], "-", color=color)
+        variants = _variant_lines(axes, x, d, s)
         axes[0].errorbar(x, d["bem_contact_area_ratio_mean"], yerr=d["bem_contact_area_ratio_std"], fmt=s["marker"],
-                         color=color, markersize=4, capsize=2)
-        axes[1].semilogx(x, d["theory_mean_separation"] * 1e9, "-", color=color)
+                         color=s["color"], markerfacecolor="white", markersize=5, capsize=2)
         axes[1].errorbar(x, d["bem_mean_gap_mean"] * 1e9, yerr=d["bem_mean_gap_std"] * 1e9, fmt=s["marker"],
-                         color=color, markersize=4, capsize=2)
-        for var, face, line in (("area_ratio_theory_to_bem", color, "-"), ("separation_ratio_theory_to_bem", "white", "--")):
-            if np.any(np.isfinite(d[var].values)):
-                axes[2].semilogx(x, d[var], marker=s["marker"], linestyle=line, color=color, markerfacecolor=face,
-                                 markersize=5)
+                         color=s["color"], markerfacecolor="white", markersize=5, capsize=2)
     _decorate(fig, axes, ds, measured, zeta_bem, grid, qL)
-    _legend(fig, cases)
+    _legend(fig, cases, variants)
+    return fig
+
+
+def reduced_pressure(ds):
+    """p / (E* g) over (p, eta): g the BEM composite's rms slope (mean over realizations), the
+    unit in which contact barely depends on the spectrum (docs/bem.md, "The separation ratio")."""
+    g = ds["bem_rms_slope_combined"].mean("realization")
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return ds["p"] / (ds["E_star"] * g)
+
+
+def figure_bem_reduced_pressure(results):
+    """Each variant's theory / BEM ratios of A/A0 and of the mean separation against the
+    reduced pressure p / (E* g) (the rough pairs only)."""
+    import matplotlib.pyplot as plt
+
+    ds, measured = _prepared(results)
+    fig, axes = plt.subplots(1, 2, figsize=(11.0, 4.8), layout="constrained")
+    x_all = reduced_pressure(ds)
+    cases, variants = [], []
+    for k, eta in enumerate(ds["eta"].values):
+        d = ds.isel(eta=k)
+        if np.all(np.asarray(d["bem_hrms_combined"].values) == 0):
+            continue  # h1 = h2: no roughness, no reduced pressure
+        x = x_all.isel(eta=k).values
+        case, text = _label(d, eta, measured)
+        s = style(case)
+        cases.append((text, s))
+        variants = [str(n) for n in d["theory"].values] if "theory" in d.dims else []
+        for name in variants:
+            v = d.sel(theory=name)
+            for ax, var in ((axes[0], "area_ratio_variant_to_bem"), (axes[1], "separation_ratio_variant_to_bem")):
+                ax.semilogx(x, v[var], _STYLES.get(name, "-."), marker=s["marker"], color=s["color"], markersize=4)
+    for ax, what in ((axes[0], "A/A0"), (axes[1], "mean separation u")):
+        ax.axhline(1.0, color="0.5", linewidth=0.8)
+        ax.set_xlabel("p / (E* g), g = rms slope of the BEM composite")
+        ax.set_ylabel(f"{what}: theory / BEM")
+        ax.grid(alpha=0.3)
+        ax.set_ylim(0, max(1.5, min(ax.get_ylim()[1], 3.0)))
+    fig.suptitle(f"Theory / BEM against the reduced pressure, at zeta = {float(results['base']['bem']['bem_zeta']):.4g}",
+                 fontsize=10)
+    _legend(fig, cases, variants, bem=False)
     return fig

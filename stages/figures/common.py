@@ -14,6 +14,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from roughcontact.physics.uncertainty import quantiles
 from roughcontact.stage import readable
 
 #: colour, marker and line of each case, in every figure
@@ -27,6 +28,8 @@ CASE_STYLES = {
 OTHER_STYLE = dict(color="C1", marker="D", linestyle="-")
 #: sweeps of more coherences than this are summarised by a colour map and the seed's cases
 MAX_CURVES = 5
+#: probability content of the shaded bands when the scene computes no bands stage
+DEFAULT_LEVEL = 0.9
 
 
 class Case(NamedTuple):
@@ -67,9 +70,18 @@ def curve_cases(results, stage: str) -> list[Case]:
         for e in selected_etas(base["eta"].values):
             out.append(Case(eta_label(e), base.sel(eta=e), style(eta_label(e))))
     else:
-        label = "pair, measured eta(q)" if measured_pair(results) else "pair"
+        label = case_of(results["base"])
         out.append(Case(label, base, style(label)))
     return out
+
+
+def case_of(res) -> str:
+    """The case of a variant's results without an eta dimension: 'pair, measured eta(q)', the
+    one constant coherence ('eta = 0'), or 'pair'."""
+    attrs = res["psd"]["psd_combined"].attrs if "psd" in res else {}
+    if attrs.get("coherence") == "measured":
+        return "pair, measured eta(q)"
+    return eta_label(attrs["eta"]) if attrs.get("coherence") == "constant" and "eta" in attrs else "pair"
 
 
 def selected_etas(values) -> list[float]:
@@ -79,12 +91,6 @@ def selected_etas(values) -> list[float]:
         return [float(v) for v in values]
     picks = [float(values[int(np.argmin(np.abs(values - target)))]) for target in (0.0, 1.0, -1.0)]
     return list(dict.fromkeys(picks))
-
-
-def measured_pair(results) -> bool:
-    """Whether the base scene's coherence is measured (eta(q) from paired maps)."""
-    psd = results["base"].get("psd")
-    return psd is not None and psd["psd_combined"].attrs.get("coherence") == "measured"
 
 
 def pick_zeta(ds, prefer: float = 4.0) -> float | None:
@@ -128,12 +134,12 @@ def zeta_text(zeta: float | None, qL: float | None) -> str:
 
 
 def reduce_dims(ds, keep: tuple[str, ...], var: str | None = None):
-    """``ds`` with every dimension of ``var`` (default: of ``ds``) but ``keep`` and ``eta``
-    reduced to its middle value, and a note saying which values the figure shows (e.g.
+    """``ds`` with every dimension of ``var`` (default: of ``ds``) but ``keep``, ``eta`` and the
+    spectrum draws reduced to its middle value, and a note saying which values the figure shows (e.g.
     'hrms_substrate = 1.05e-09')."""
     notes = []
     dims = ds[var].dims if var is not None else ds.dims
-    for dim in [d for d in dims if d not in keep and d != "eta"]:
+    for dim in [d for d in dims if d not in keep and d not in ("eta", "draw")]:
         k = ds.sizes[dim] // 2
         value = ds[dim].values[k] if dim in ds.coords else k
         units = ds[dim].attrs.get("units", "") if dim in ds.coords else ""
@@ -158,3 +164,55 @@ def legend_outside(fig, axes=None, below: bool = False):
         else:
             fig.legend(handles, labels, loc="outside right upper", fontsize=8)
     return fig
+
+
+def band_level(results) -> float:
+    """The level of the scene's uncertainty bands (its bands stage's, else :data:`DEFAULT_LEVEL`)."""
+    for variant in results.values():
+        if "bands" in variant:
+            return float(variant["bands"].attrs.get("level", DEFAULT_LEVEL))
+    return DEFAULT_LEVEL
+
+
+def nominal(obj):
+    """A Dataset or DataArray at draw 0 (the measured spectrum) if it has spectrum draws."""
+    return obj.isel(draw=0, drop=True) if "draw" in obj.dims else obj
+
+
+def draw_band(da, level: float):
+    """(lower, upper) quantiles over the draws 1..N of ``da`` (arrays over its other dimensions),
+    or None without draws."""
+    if "draw" not in da.dims:
+        return None
+    values = da.isel(draw=slice(1, None)).transpose(..., "draw").values
+    q = quantiles(values, [(1.0 - level) / 2.0, (1.0 + level) / 2.0])
+    return q[..., 0], q[..., 1]
+
+
+def band_on(x0, xs, ys, level: float):
+    """Quantiles over draws 1..N of curves (xs[d], ys[d]) read at the abscissae ``x0`` (each
+    draw has its own abscissae, e.g. an adaptive stress grid)."""
+    curves = np.stack([np.interp(x0, x, y, left=0.0, right=0.0) for x, y in zip(xs[1:], ys[1:])], axis=-1)
+    q = quantiles(curves, [(1.0 - level) / 2.0, (1.0 + level) / 2.0])
+    return q[..., 0], q[..., 1]
+
+
+def line_with_band(ax, x, da, level: float, *, across=False, **style):
+    """Plot ``da`` at draw 0 against ``x`` and shade its band over the draws in the line's colour.
+
+    ``da`` is a DataArray over one dimension (and ``draw``); ``across``: the values go on the
+    horizontal axis (``x`` is then the vertical coordinate). Returns the line."""
+    y = np.atleast_1d(nominal(da).values)
+    line, = ax.plot(y, x, **style) if across else ax.plot(x, y, **style)
+    band = draw_band(da, level)
+    if band is not None:
+        fill = ax.fill_betweenx if across else ax.fill_between
+        fill(x, band[0], band[1], color=line.get_color(), alpha=0.22, lw=0)
+    return line
+
+
+def band_note(results, ds) -> str:
+    """A legend/title note on the shaded bands ('' without draws)."""
+    if "draw" not in ds.dims:
+        return ""
+    return f"shaded: {band_level(results):.0%} band over {ds.sizes['draw'] - 1} spectrum draws"

@@ -7,13 +7,13 @@ import numpy as np
 
 from roughcontact.stage import UserError
 
-from .common import (at_zeta, curve_cases, legend_outside, line_style, pick_zeta, q_reference, reduce_dims,
-                     selected_etas, zeta_text)
+from .common import (at_zeta, band_level, band_note, band_on, curve_cases, legend_outside, line_style, line_with_band,
+                     nominal, pick_zeta, q_reference, reduce_dims, selected_etas, zeta_text)
 
 
 def _colour_map(ax, ds, E_star):
     """A/A0 over (p/E*, eta) of a long coherence sweep, as a colour map."""
-    area = ds["contact_area_ratio"].transpose("eta", "p")
+    area = nominal(ds["contact_area_ratio"]).transpose("eta", "p")
     mesh = ax.pcolormesh(ds["p"].values / E_star, ds["eta"].values, area.values, shading="nearest",
                          cmap="viridis", vmin=0.0, vmax=1.0)
     ax.set_xscale("log")
@@ -33,23 +33,24 @@ def figure_contact_area(results):
     many = "eta" in base.dims and base.sizes["eta"] > len(selected_etas(base["eta"].values))
     fig, axes = plt.subplots(1, 2 if many else 1, figsize=(11.5 if many else 7.2, 4.4), layout="constrained",
                              squeeze=False)
-    notes = set()
+    notes, level = set(), band_level(results)
     ax = axes[0][-1]
+    ax.set_xscale("log")
     for case in curve_cases(results, "contact"):
         ds, note = reduce_dims(at_zeta(case.ds, zeta), ("p",), "contact_area_ratio")
-        notes.add(note)
-        p = np.atleast_1d(ds["p"].values) / float(ds["E_star"])
-        ax.semilogx(p, np.atleast_1d(ds["contact_area_ratio"].values), label=case.label,
-                    **line_style(case.label, p.size))
+        notes |= {note, band_note(results, ds)}
+        p = np.atleast_1d(ds["p"].values) / float(nominal(ds["E_star"]))
+        line_with_band(ax, p, ds["contact_area_ratio"], level, label=case.label, **line_style(case.label, p.size))
     ax.set_xlabel("p / E*")
     ax.set_ylabel("A / A0")
     ax.set_ylim(0, 1.02)
     ax.grid(alpha=0.3)
     if many:
-        _colour_map(axes[0][0], reduce_dims(at_zeta(base, zeta), ("p",), "contact_area_ratio")[0], float(base["E_star"]))
+        _colour_map(axes[0][0], reduce_dims(at_zeta(base, zeta), ("p",), "contact_area_ratio")[0],
+                    float(nominal(base["E_star"])))
         ax.set_title("the seed's cases (nearest coherences)", fontsize=9)
     extra = "; ".join(sorted(n for n in notes if n))
-    title = f"Relative contact area (seed Fig. 3) at\n{zeta_text(zeta, q_reference(results))}" + (f"; {extra}" if extra else "")
+    title = f"Relative contact area (seed Fig. 3) at\n{zeta_text(zeta, q_reference(results))}" + (f"\n{extra}" if extra else "")
     if many:
         fig.suptitle(title, fontsize=10)
     else:
@@ -59,7 +60,7 @@ def figure_contact_area(results):
 
 def _pressures(reference, zeta):
     """Three pressures where the reference case's A/A0 is about 0.1, 0.3 and 0.6."""
-    ref = reduce_dims(at_zeta(reference, zeta), ("p",), "contact_area_ratio")[0]["contact_area_ratio"]
+    ref = nominal(reduce_dims(at_zeta(reference, zeta), ("p",), "contact_area_ratio")[0]["contact_area_ratio"])
     return sorted({float(ref["p"][int(np.argmin(np.abs(ref.values - a)))]) for a in (0.1, 0.3, 0.6)})
 
 
@@ -74,21 +75,24 @@ def figure_stress_distribution(results):
         raise UserError("the scene does not ask for 'stress_distribution' (add it to outputs.variables)",
                         key="outputs.variables")
     zeta = pick_zeta(base)
-    E_star = float(base["E_star"])
-    picks = _pressures(cases[0].ds, zeta)
+    E_star = float(nominal(base["E_star"]))
+    picks, level = _pressures(cases[0].ds, zeta), band_level(results)
     fig, axes = plt.subplots(1, len(picks), figsize=(3.6 * len(picks) + 2.2, 3.8), squeeze=False, layout="constrained")
     for ax, p in zip(axes[0], picks):
         right = 0.0
         for case in cases:
             ds = reduce_dims(at_zeta(case.ds, zeta), ("p", "stress_level"), "stress_distribution")[0]
-            d = ds["stress_distribution"].sel(p=p, method="nearest")
-            G = float(ds["G"])
+            draws = ds["stress_distribution"].sel(p=p, method="nearest")
+            d, G = nominal(draws), float(nominal(ds["G"]))
             kw = dict(color=case.style["color"], linestyle=case.style["linestyle"])
             if G > 0:
                 sigma = d["sigma"].values / E_star
                 ax.plot(sigma, d.values * E_star, label=case.label, marker=case.style["marker"],
                         markevery=max(1, sigma.size // 10), markersize=4, **kw)
                 right = max(right, (p + 5.0 * np.sqrt(G)) / E_star)
+                if "draw" in draws.dims:
+                    lo, hi = band_on(d["sigma"].values, draws["sigma"].values, draws.values, level)
+                    ax.fill_between(sigma, lo * E_star, hi * E_star, color=kw["color"], alpha=0.22, lw=0)
             else:
                 ax.axvline(p / E_star, label=f"{case.label} (full contact: a delta at p)", **kw)
         ax.set_xlim(0, right or 2 * p / E_star)
@@ -96,5 +100,7 @@ def figure_stress_distribution(results):
         ax.set_title(f"p / E* = {p / E_star:.3g}", fontsize=9)
         ax.grid(alpha=0.3)
     axes[0][0].set_ylabel("P(sigma) E*")
-    fig.suptitle(f"Stress distribution (seed Fig. 4) at {zeta_text(zeta, q_reference(results))}", fontsize=10)
+    note = band_note(results, base)
+    fig.suptitle(f"Stress distribution (seed Fig. 4) at {zeta_text(zeta, q_reference(results))}"
+                 + (f"\n{note}" if note else ""), fontsize=10)
     return legend_outside(fig, list(axes[0]), below=True)

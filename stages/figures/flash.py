@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .common import eta_label, legend_outside, q_reference, style, wavenumber
+
 
 def _select(da, eta):
     """The curve over v for one eta (every other dimension at its first value) and a note."""
@@ -23,13 +25,12 @@ def figure_flash(results):
 
     ds = results["base"]["friction"]
     etas = ds["eta"].values if "eta" in ds.dims else [0.0]
-    colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
-    fig, (left, right) = plt.subplots(1, 2, figsize=(10.0, 4.3))
+    fig, (left, right) = plt.subplots(1, 2, figsize=(11.0, 4.8), layout="constrained")
     notes = set()
     T0 = ds["T"] if "T" in ds.coords else None
-    for k, eta in enumerate(etas):
-        c = colors[k % len(colors)]
-        label = f"eta = {eta:g}" if "eta" in ds.dims else "as in the scene"
+    for eta in etas:
+        label = eta_label(eta) if "eta" in ds.dims else "as in the scene"
+        c = style(label if "eta" in ds.dims else "pair")["color"]
         mu, note = _select(ds["friction_coefficient"], eta)
         iso, _ = _select(ds["friction_coefficient_isothermal"], eta)
         flash, _ = _select(ds["flash_temperature"], eta)
@@ -45,16 +46,16 @@ def figure_flash(results):
     left.set_xlabel("sliding velocity v (m/s)")
     left.set_ylabel("friction coefficient mu")
     left.set_ylim(bottom=0)
-    left.legend(fontsize=7)
     right.set_xlabel("sliding velocity v (m/s)")
     right.set_ylabel("temperature rise of the contacts at q1 (K)")
     right.set_ylim(bottom=1e-3)
-    right.legend(fontsize=7)
     for ax in (left, right):
         ax.grid(True, which="major", alpha=0.3)
     if T0 is not None and T0.ndim == 0:
         notes.add(f"T = {float(T0) - 273.15:.4g} °C")
+    qL = q_reference(results)
+    if qL:
+        notes.add(f"q from qL = {wavenumber(qL)}")
     note = "; ".join(sorted(n for n in notes if n))
     fig.suptitle("Flash temperature (Persson 2006)" + (f" ({note})" if note else ""), fontsize=10)
-    fig.tight_layout()
-    return fig
+    return legend_outside(fig, [left, right], below=True)

@@ -6,14 +6,15 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from .common import eta_label, legend_outside, line_style, q_reference, wavenumber
+from .common import (band_level, band_note, draw_band, eta_label, legend_outside, line_style, line_with_band, nominal,
+                     q_reference, wavenumber)
 
 
 def _first(da: xr.DataArray, keep: tuple[str, ...]) -> tuple[xr.DataArray, str]:
-    """Reduce every dimension but ``keep`` to its first value; say which in a note."""
+    """Reduce every dimension but ``keep`` (and the spectrum draws) to its first value; say which in a note."""
     notes = []
     for dim in list(da.dims):
-        if dim not in keep:
+        if dim not in keep and dim != "draw":
             value = da[dim].values[0]
             notes.append(f"{dim} = {value:.4g}" if dim != "T" else f"T = {value - 273.15:.4g} °C")
             da = da.isel({dim: 0})
@@ -51,10 +52,11 @@ def _friction_figure(results, which, etas, title, ylabel, logy=False):
 
     fig, ax = plt.subplots(figsize=(7.8, 4.3), layout="constrained")
     notes = set()
+    ax.set_xscale("log")
     for label, da, note, case in _curves(results, which, etas):
-        ax.semilogx(da["v"].values, da.values, label=label, **line_style(case, da.sizes["v"], markers=15))
-        if note:
-            notes.add(note)
+        line_with_band(ax, da["v"].values, da, band_level(results), label=label,
+                       **line_style(case, da.sizes["v"], markers=15))
+        notes |= {n for n in (note, band_note(results, da)) if n}
     qL = q_reference(results)
     if qL:
         notes.add(f"q from qL = {wavenumber(qL)}")
@@ -95,10 +97,15 @@ def figure_psds(results):
     psd = results["base"]["psd"]
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.2), layout="constrained")
     for ax, name, title in ((axes[0], "solid", "(a) elastic solid (rubber)"), (axes[1], "substrate", "(b) substrate")):
-        da, note = _first(psd[f"psd_{name}"], ("q",))
+        draws, note = _first(psd[f"psd_{name}"], ("q",))
+        da = nominal(draws)
         q = da["q"].values
         C = da.values
         mask = C > 0
+        band = draw_band(draws, band_level(results))
+        if band is not None and np.any(mask):
+            ax.fill_between(q[mask], band[0][mask], band[1][mask], color="C0", alpha=0.25, lw=0,
+                            label=band_note(results, draws))
         if not np.any(mask):
             ax.text(0.5, 0.5, "smooth", transform=ax.transAxes, ha="center")
         else:

@@ -5,7 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .common import at_zeta, curve_cases, legend_outside, line_style, pick_zeta, q_reference, reduce_dims, zeta_text
+from .common import (at_zeta, band_level, band_note, curve_cases, legend_outside, line_style, line_with_band, nominal,
+                     pick_zeta, q_reference, reduce_dims, zeta_text)
 
 
 def figure_separation(results):
@@ -15,14 +16,16 @@ def figure_separation(results):
 
     fig, ax = plt.subplots(figsize=(7.6, 4.6), layout="constrained")
     zeta = pick_zeta(results["base"]["separation"])
-    notes = set()
+    notes, level = set(), band_level(results)
     for i, case in enumerate(curve_cases(results, "separation")):
-        ds, note = reduce_dims(at_zeta(case.ds, zeta), ("p",), "mean_separation")
-        notes.add(note)
+        draws, note = reduce_dims(at_zeta(case.ds, zeta), ("p",), "mean_separation")
+        notes |= {note, band_note(results, draws)}
+        ds = nominal(draws)
         u = np.atleast_1d(ds["mean_separation"].values)
         p = np.atleast_1d(ds["p"].values) / float(ds["E_star"])
         label = case.label + (" (u = 0: no combined roughness)" if np.all(u == 0) else "")
-        ax.plot(u * 1e9, np.log10(p), label=label, **line_style(case.label, u.size))
+        line_with_band(ax, np.log10(p), draws["mean_separation"] * 1e9, level, across=True, label=label,
+                       **line_style(case.label, u.size))
         u0, beta = float(ds["separation_u0"]), float(ds["separation_beta"])
         if u0 > 0 and np.isfinite(beta):
             law = u0 * np.log(beta / p)
@@ -35,5 +38,5 @@ def figure_separation(results):
     ax.grid(alpha=0.3)
     extra = "; ".join(sorted(n for n in notes if n))
     ax.set_title(f"Interfacial separation (seed Fig. 5) at\n{zeta_text(zeta, q_reference(results))}"
-                 + (f"; {extra}" if extra else ""), fontsize=10)
+                 + (f"\n{extra}" if extra else ""), fontsize=10)
     return legend_outside(fig)
