@@ -190,7 +190,7 @@ def compute_psd(inp: StageInput) -> xr.Dataset:
     scope = scope_attrs(inp, topography, float(q_values[0]))
     combined.attrs = {"formula": how, "coherence": scope["coherence"]}
     if scope["coherence"] == "constant":  # the one eta, for labels (it is no coordinate)
-        combined.attrs["eta"] = float(inp["interface.eta"])
+        combined.attrs["eta"] = float(np.ravel(inp["interface.eta"])[0])
     nominal = {k: v.isel(draw=0, drop=True) if "draw" in v.dims else v for k, v in surfaces.items()}
     combined_err = xr.apply_ufunc(combined_psd_error, nominal["substrate"], nominal["solid"], eta, errors["substrate"],
                                   errors["solid"], eta_err, dask="parallelized", output_dtypes=[float])
