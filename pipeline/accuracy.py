@@ -29,6 +29,7 @@ import numpy as np
 import xarray as xr
 
 from . import __version__, engine, scene as scenes, store
+from .errors import UserError
 from .scene import PRESETS, Scene
 from .stage import Stage, sections
 
@@ -193,6 +194,10 @@ def measure(scene: Scene, outdir: Path, report=print, progress: bool = True) -> 
                                                         f"  MISSES its target {m['tolerance']:g}")
                     report(f"  {st.name:12s} {name:9s} error {worst:9.2e}  time {secs:7.3f} s"
                            + (f" (= rung {rung})" if rung is not None else "") + met)
+    if not measured:  # no table and no blank plot: say why
+        names = ", ".join(st.name for st in all_stages)
+        raise UserError(f"none of this scene's stages ({names}) has a numerical resolution whose error "
+                        "roughcontact accuracy measures", key="outputs.variables")
     ds = _table(measured)
     ds.attrs.update(
         Conventions="CF-1.11",

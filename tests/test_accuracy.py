@@ -65,3 +65,12 @@ def test_the_table_states_its_measure_and_reuses_runs_of_equal_settings(tmp_path
     assert main(["show", str(tmp_path / "acc" / "accuracy.nc")]) == 0
     out = capsys.readouterr().out
     assert "roughcontact accuracy table" in out and "stage ?" not in out and "error measure" in out
+
+
+def test_a_scene_without_measured_outputs_is_told_so_and_nothing_is_written(tmp_path):
+    from roughcontact.errors import UserError
+
+    sc = scenes.from_dict(make_scene(outputs={"variables": ["psd_combined"]}))
+    with pytest.raises(UserError, match="none of this scene's stages \\(psd\\)"):
+        measure(sc, tmp_path / "acc", report=lambda line: None, progress=False)
+    assert not (tmp_path / "acc").exists()
