@@ -15,7 +15,7 @@ from typing import Iterable, TextIO
 
 import xarray as xr
 
-from . import store
+from . import reuse, store
 from .errors import UserError
 from .readers import READERS
 from .schema import MISSING
@@ -39,6 +39,9 @@ class StagePlan:
     file_paths: dict = field(default_factory=dict)
     inputs: list[dict] = field(default_factory=list)
     scene_label: str = ""
+    #: an identical result (same key) to put in place instead of computing: a kept result of
+    #: the output folder or the result of an earlier stage of the run (see roughcontact.reuse)
+    source: Path | None = None
 
     @property
     def label(self) -> str:
@@ -83,17 +86,31 @@ def plan(scene: Scene, outdir: Path, targets: Iterable[str] | None = None, force
     if unknown:
         raise UserError(f"--force names unknown stage(s): {', '.join(sorted(unknown))}")
     plans: list[StagePlan] = []
+    earlier: dict[str, Path] = {}  # key -> where the run will have that result
     for variant, sc in (("base", scene), *scene.variants.items()):
         keys: dict[str, str] = {}
         for st in needed_stages(sc, targets):
             p = _plan_stage(sc, variant, st, outdir, keys, targets, force)
             keys[st.name] = p.key
+            if p.status != "fresh" and not force & {st.name, "all"}:
+                _find_identical(p, earlier, outdir)
+            earlier.setdefault(p.key, p.path)
             plans.append(p)
     return plans
 
 
+def _find_identical(p: StagePlan, earlier: dict[str, Path], outdir: Path) -> None:
+    """Where the run can take ``p``'s result from without computing it, said in its reasons."""
+    if p.key in earlier:
+        p.source = earlier[p.key]
+        p.reasons.append(f"identical to {p.source}")
+    elif (kept := reuse.stored(outdir, p.key)) is not None:
+        p.source = kept
+        p.reasons.append("an identical result of an earlier run is kept")
+
+
 def _plan_stage(scene, variant, st, outdir, keys, targets, force) -> StagePlan:
-    params = {name: scene.get(name) for name in st.params}
+    params = {name: st.section_view(name, scene.get(name)) for name in st.params}
     absent = [name for name, value in params.items() if value is MISSING]
     if absent:
         raise UserError(f"missing required key (stage {st.name} needs it)", key=absent[0])
@@ -104,22 +121,22 @@ def _plan_stage(scene, variant, st, outdir, keys, targets, force) -> StagePlan:
             continue
         if isinstance(value, (list, tuple)):  # a `paths` parameter: several files, read one by one
             file_paths[f.param] = tuple(Path(v) for v in value)
-            inputs += [{"param": f"{f.param}[{i}]", "path": str(v), "sha256": store.file_sha256(Path(v))}
-                       for i, v in enumerate(value)]
+            inputs += [reuse.input_entry(f"{f.param}[{i}]", v, scene.path) for i, v in enumerate(value)]
             continue
         file_paths[f.param] = Path(value)
-        inputs.append({"param": f.param, "path": str(value), "sha256": store.file_sha256(Path(value))})
+        inputs.append(reuse.input_entry(f.param, value, scene.path))
     upstream = {up: keys[up] for up in (st.needed(scene.values) if st.needed else st.requires)}
     wanted = frozenset(t for t in targets if t in st.outputs and st.outputs[t].optional)
     record = {
         "stage": st.name,
         "version": st.version,
-        "parameters": params,
+        "parameters": reuse.key_parameters(params),  # file paths out: their hashes are the inputs
         "upstream": upstream,
         "inputs": {i["param"]: i["sha256"] for i in inputs},
         "optional_outputs": sorted(wanted),
     }
     key = store.content_key(record)
+    record["paths"] = {i["param"]: i["path"] for i in inputs}  # for messages only: not part of the key
     path = result_path(outdir, variant, st.name)
     stored = store.read_attrs(path)
     if stored is None:
@@ -164,7 +181,8 @@ def _why_stale(stored: dict, record: dict) -> list[str]:
             reasons.append(f"upstream stage {name} changed")
     for name in sorted(set(old_inputs) | set(record["inputs"])):
         if old_inputs.get(name) != record["inputs"].get(name):
-            reasons.append(f"input file {name} changed (sha256)")
+            shown = record.get("paths", {}).get(name)
+            reasons.append(f"input file {name}{f' ({shown})' if shown else ''} changed (sha256)")
     if sorted(old_optional) != record["optional_outputs"]:
         reasons.append(f"optional outputs {old_optional} -> {record['optional_outputs']}")
     return reasons or ["key differs"]
@@ -207,7 +225,7 @@ def _finish(ds: xr.Dataset, p: StagePlan) -> xr.Dataset:
         attrs.update(stamp)
     extra = dict(ds.attrs)
     ds.attrs = {**extra, **store.provenance_attrs(
-        stage=st.name, version=st.version, key=p.key, parameters=p.params, upstream=p.record["upstream"],
+        stage=st.name, version=st.version, key=p.key, parameters=p.record["parameters"], upstream=p.record["upstream"],
         inputs=p.inputs, optional=list(p.wanted), scene=p.scene_label, variant=p.variant)}
     return ds
 
@@ -253,7 +271,7 @@ def _run(scene, outdir, targets, force, report, compute_with):
     # read every input file and run every validation before anything computes or is written
     files: dict[int, dict] = {}
     for i, p in enumerate(plans):
-        if p.status == "fresh":
+        if p.status == "fresh" or p.source is not None:
             continue
         files[i] = {param: _read(p.stage, param, path, p.params) for param, path in p.file_paths.items()}
         if p.stage.validate is not None:
@@ -263,6 +281,11 @@ def _run(scene, outdir, targets, force, report, compute_with):
         tag = f"[{i}/{n}] {p.label}"
         if p.status == "fresh":
             report(f"{tag}: up to date ({p.path})")
+            results[p.variant][p.stage.name] = _open(p.path)
+            continue
+        if p.source is not None:
+            reuse.place(p.source, p.path, outdir)
+            report(f"{tag}: reused, not recomputed ({'; '.join(p.reasons)}) -> {p.path}")
             results[p.variant][p.stage.name] = _open(p.path)
             continue
         report(f"{tag}: computing ({'; '.join(p.reasons)})")
@@ -279,9 +302,11 @@ def _run(scene, outdir, targets, force, report, compute_with):
         with xr.set_options(keep_attrs=False):  # a variable's units come from its declaration, never by inheritance
             computed = p.stage.compute(inp)
         ds = _finish(computed, p)
+        reuse.retire(p.path, outdir)  # the result it replaces stays reusable under its key
         store.write(ds, p.path, compute_with=compute_with, progress_stream=report.stream)
         results[p.variant][p.stage.name] = _open(p.path)
         report(f"{tag}: done in {time.perf_counter() - t0:.2f} s -> {p.path}")
+    reuse.prune(outdir, [p.path for p in plans])
     return results
 
 

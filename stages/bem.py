@@ -26,7 +26,7 @@ from roughcontact.stage import (
 
 from .figures.bem import figure_bem_comparison
 from .maps import check_eta, map_band, map_surfaces, measured_maps, topography_files
-from .shared import E_STAR, MATERIAL_KEYS, e_star
+from .shared import E_STAR, MAP_KEYS, MATERIAL_KEYS, e_star, surface_reads
 
 #: the optional dependency and how to install it (named in the error without it)
 EXTRA = 'pip install "roughcontact[bem]"'
@@ -286,7 +286,9 @@ register(
         params=(*MATERIAL_KEYS, "load.p", "interface.eta", "substrate", "solid", "bem.surfaces",
                 "bem.grid", "bem.realizations", "bem.seed", "bem.pixels_per_wavelength", "numerics.bem_tolerance",
                 "numerics.bem_stress_bins", "numerics.sigma_width"),
-        # measured maps (kind = "topography"): the engine reads them; used when bem.surfaces allows
+        # measured maps (kind = "topography"): the engine reads them; used when bem.surfaces allows.
+        # Synthesized surfaces come from the psd stage's spectra: of those sections, only the kind
+        reads=surface_reads({"topography": MAP_KEYS, "*": ()}),
         files=(topography_files("substrate"), topography_files("solid")),
         outputs={
             "bem_contact_area_ratio": Var("1", "relative contact area A/A0 from the BEM (fraction of pixels in "

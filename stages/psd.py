@@ -24,7 +24,7 @@ from roughcontact.physics.spectra import (
 from roughcontact.stage import FileInput, Stage, StageInput, UserError, Var, register
 
 from .maps import measured_coherence_on_grid, measured_psd_on_grid
-from .shared import SURFACES, is_rough, needs_topography
+from .shared import SURFACES, is_rough, needs_topography, surface_reads
 
 
 def _measured(name: str, spec: dict, spectrum, q_grid: np.ndarray) -> tuple[np.ndarray, dict]:
@@ -158,6 +158,8 @@ register(
         version="1",
         compute=compute_psd,
         params=("substrate", "solid", "interface.eta", "grid.q_min", "grid.q_max", "numerics.points_per_decade"),
+        # a measured surface's spectrum comes from the topography stage: of it, only how to extend it
+        reads=surface_reads({"topography": ("extend",)}),
         files=(_files("substrate"), _files("solid")),
         requires=("topography",),
         needed=lambda values: ("topography",) if needs_topography(values) else (),

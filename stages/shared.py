@@ -140,6 +140,16 @@ TOPOGRAPHY_PARAMS = (
           doc="how the psd stage extends the measured PSD beyond its q range (none: error)"),
 )
 
+#: the keys of a measured surface (kind "topography") that reading and preparing its maps takes
+#: (units, sizes, detrending, window, analysis, reliability cutoffs); ``extend`` and ``hurst`` are not among them
+MAP_KEYS = ("files", "height_unit", "size_x", "size_y", "periodic", "analysis", "detrend", "window", "tip_radius",
+            "resolution", "q_reliable")
+
+
+def surface_reads(by_kind: dict) -> dict:
+    """A stage's ``reads`` for both surface sections: the same keys of each per kind."""
+    return {name: dict(by_kind) for name in SURFACES}
+
 
 def _surface_section(name: str, doc: str) -> Section:
     return Section(

@@ -25,7 +25,7 @@ from roughcontact.stage import Figure, Param, Stage, StageInput, UserError, Var,
 
 from .figures.topography import figure_coherence, figure_measured_psd
 from .maps import prepare_map, process_map, topography_files
-from .shared import SURFACES, is_topography
+from .shared import MAP_KEYS, SURFACES, is_topography, surface_reads
 
 register_params(
     "numerics",
@@ -133,6 +133,8 @@ register(
         version="1",
         compute=compute_topography,
         params=("substrate", "solid", "numerics.topography_bins_per_decade"),
+        # of a measured surface the map keys and the line-scan H; of any other surface only its kind
+        reads=surface_reads({"topography": (*MAP_KEYS, "hurst"), "*": ()}),
         files=(topography_files("substrate"), topography_files("solid")),
         outputs={
             **{f"psd_{s}_measured": Var("m^4", f"measured PSD of the {s} (Persson convention)") for s in SURFACES},
