@@ -104,7 +104,9 @@ class Param:
             values = parse_sweep(raw, self.units, key)
             for v in np.atleast_1d(values):
                 self._bounded(float(v), key)
-            return values
+            # a sweep becomes a coordinate, which CF wants strictly monotonic: increasing, whatever
+            # order the scene lists it in (results do not depend on the order)
+            return np.sort(values) if k == "sweep" and isinstance(values, np.ndarray) else values
         if k == "int":
             if isinstance(raw, bool) or not isinstance(raw, int):
                 raise UserError(f"expected a whole number, got {raw!r}", key=key)

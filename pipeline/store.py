@@ -21,7 +21,7 @@ from typing import Any, Mapping
 import numpy as np
 import xarray as xr
 
-from . import __version__
+from . import __version__, cf
 
 TMP_PREFIX = ".tmp-"
 
@@ -63,17 +63,37 @@ def file_sha256(path: Path) -> str:
 
 @functools.cache
 def git_commit() -> str:
-    """Commit of the roughcontact source tree, where it is a git checkout ('unknown' otherwise)."""
+    """The commit of the running roughcontact: from git where the package runs from its checkout
+    (an editable install; ``-dirty`` with uncommitted changes), else the one setuptools-scm
+    recorded when the installed package was built."""
     here = Path(__file__).resolve().parent.parent
     try:
-        out = subprocess.run(["git", "-C", str(here), "rev-parse", "HEAD"], capture_output=True, text=True, timeout=5)
-        if out.returncode == 0:
+        top = subprocess.run(["git", "-C", str(here), "rev-parse", "--show-toplevel"], capture_output=True,
+                             text=True, timeout=5)
+        if top.returncode == 0 and Path(top.stdout.strip()).resolve() == here:
+            head = subprocess.run(["git", "-C", str(here), "rev-parse", "HEAD"], capture_output=True, text=True,
+                                  timeout=5).stdout.strip()
             dirty = subprocess.run(["git", "-C", str(here), "status", "--porcelain", "--untracked-files=no"],
                                    capture_output=True, text=True, timeout=5).stdout.strip()
-            return out.stdout.strip() + ("-dirty" if dirty else "")
+            if head:
+                return head + ("-dirty" if dirty else "")
     except (OSError, subprocess.SubprocessError):
         pass
-    return "unknown"
+    return built_commit()
+
+
+def built_commit() -> str:
+    """The commit the installed package was built from, as setuptools-scm recorded it, with
+    ``-dirty`` if the tree had uncommitted changes."""
+    import importlib
+
+    built = importlib.import_module(f"{__package__}._version")  # written at build time, with __version__
+    commit = getattr(built, "commit_id", None)
+    if not commit:
+        return "unknown (built without git metadata)"
+    local = built.__version__.partition("+")[2].split(".")
+    dirty = any(part.startswith("d") and part[1:].isdigit() for part in local)
+    return commit.removeprefix("g") + ("-dirty" if dirty else "")  # git nodes are written g<hash>
 
 
 def utc_now() -> str:
@@ -131,10 +151,12 @@ def write(ds: xr.Dataset, path: Path, compute_with="threads", progress_stream=No
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f"{TMP_PREFIX}{path.name}.", dir=path.parent)
     os.close(fd)
+    os.chmod(tmp, new_file_mode())  # mkstemp makes it 0600; a result is a file like any other
     try:
         ds = _encodable(ds)
         lazy = dask_variables(ds)
-        ds.drop_vars(lazy).to_netcdf(tmp, engine="netcdf4")
+        eager = ds.drop_vars(lazy)
+        eager.to_netcdf(tmp, engine="netcdf4", encoding=cf.encoding(eager))
         if lazy:
             _define(tmp, ds, lazy)
             write_blocks(tmp, ds, lazy, compute_with, progress_stream)
@@ -144,6 +166,13 @@ def write(ds: xr.Dataset, path: Path, compute_with="threads", progress_stream=No
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
+
+
+def new_file_mode() -> int:
+    """The permissions the user's umask gives a new file (0644 under umask 022)."""
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return 0o666 & ~mask
 
 
 def _define(path, ds: xr.Dataset, names: list[str]) -> None:
@@ -156,8 +185,7 @@ def _define(path, ds: xr.Dataset, names: list[str]) -> None:
             for dim in var.dims:
                 if dim not in nc.dimensions:
                     nc.createDimension(dim, ds.sizes[dim])
-            fill = np.nan if np.issubdtype(var.dtype, np.floating) else None
-            target = nc.createVariable(name, var.dtype, var.dims, fill_value=fill)
+            target = nc.createVariable(name, var.dtype, var.dims, **cf.lazy_variable(ds, name))
             target.setncatts(dict(var.attrs))
         coords = [n for n in names if n in ds.coords and n not in ds.dims]
         for name in ds.data_vars:

@@ -28,7 +28,9 @@ register_coords(
     hrms_substrate=Var("m", "rms roughness of the substrate"),
     hrms_solid=Var("m", "rms roughness of the solid"),
     v=Var("m/s", "sliding velocity"),
-    T=Var("K", "temperature"),
+    # CF has no standard name for the temperature of a solid (its temperature names are of the air, sea,
+    # soil, ...); CF-1.11's units_metadata says it is a temperature on its scale, not a difference
+    T=Var("K", "temperature", attrs={"units_metadata": "temperature: on_scale"}),
     omega=Var("rad/s", "angular frequency"),
 )
 
