@@ -7,17 +7,17 @@ existing result, and computes only what is missing or stale, upstream first.
 
 from __future__ import annotations
 
-import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Iterable, TextIO
+from typing import Iterable
 
 import xarray as xr
 
 from . import reuse, store
 from .errors import UserError
 from .readers import READERS
+from .progress import Reporter
 from .schema import MISSING
 from .scene import Scene
 from .stage import Stage, StageInput, coords, producer_of, stages
@@ -230,18 +230,6 @@ def _finish(ds: xr.Dataset, p: StagePlan) -> xr.Dataset:
     return ds
 
 
-class Reporter:
-    """Progress messages per stage, on stderr (quiet in tests if asked)."""
-
-    def __init__(self, stream: TextIO | None = sys.stderr):
-        self.stream = stream
-
-    def __call__(self, message: str) -> None:
-        if self.stream is not None:
-            print(message, file=self.stream, flush=True)
-
-
-
 #: results larger than this many bytes are handed downstream lazily (dask-backed), not loaded
 LOAD_LIMIT_BYTES = 256 * 2**20
 
@@ -288,7 +276,8 @@ def _run(scene, outdir, targets, force, report, compute_with):
             report(f"{tag}: reused, not recomputed ({'; '.join(p.reasons)}) -> {p.path}")
             results[p.variant][p.stage.name] = _open(p.path)
             continue
-        report(f"{tag}: computing ({'; '.join(p.reasons)})")
+        why = "; ".join(p.reasons)
+        report.live(f"{tag}: computing ({why})")
         t0 = time.perf_counter()
         upstream = {up: results[p.variant][up] for up in p.record["upstream"]}
         inp = StageInput(
@@ -298,14 +287,16 @@ def _run(scene, outdir, targets, force, report, compute_with):
             wanted=p.wanted,
             chunks=stage_chunks(scenes[p.variant], p.stage, p.params, p.wanted, upstream),
             stage=p.stage.name,
+            reporter=report,
         )
         with xr.set_options(keep_attrs=False):  # a variable's units come from its declaration, never by inheritance
             computed = p.stage.compute(inp)
         ds = _finish(computed, p)
         reuse.retire(p.path, outdir)  # the result it replaces stays reusable under its key
-        store.write(ds, p.path, compute_with=compute_with, progress_stream=report.stream)
+        store.write(ds, p.path, compute_with=compute_with, progress=report)
+        report.finish()
         results[p.variant][p.stage.name] = _open(p.path)
-        report(f"{tag}: done in {time.perf_counter() - t0:.2f} s -> {p.path}")
+        report(f"{tag}: computed in {time.perf_counter() - t0:.2f} s ({why}) -> {p.path}")
     reuse.prune(outdir, [p.path for p in plans])
     return results
 

@@ -200,6 +200,15 @@ class StageInput:
     wanted: frozenset[str] = frozenset()
     chunks: Mapping[str, int] = field(default_factory=dict)
     stage: str = "?"
+    #: the engine's :class:`roughcontact.progress.Reporter` (None: no progress shown)
+    reporter: Any = None
+
+    def progress(self, what: str, total: int | None = None, unit: str = "step") -> Callable[..., None]:
+        """A callable ``tick(n=1)`` advancing a progress bar of ``what`` (on a terminal; a no-op
+        elsewhere and in worker processes): hand it to a long kernel as its ``progress``."""
+        from .progress import Tick
+
+        return Tick() if self.reporter is None else self.reporter.bar(f"{self.stage}: {what}", total, unit)
 
     def __getitem__(self, key: str):
         try:

@@ -137,12 +137,13 @@ def _encodable(ds: xr.Dataset) -> xr.Dataset:
     return ds
 
 
-def write(ds: xr.Dataset, path: Path, compute_with="threads", progress_stream=None) -> None:
+def write(ds: xr.Dataset, path: Path, compute_with="threads", progress=None) -> None:
     """Write ``ds`` to ``path`` atomically: a temporary file in the same folder, then a rename.
 
     Dask-backed variables are computed block by block by ``compute_with`` (a dask scheduler
     name or a distributed Client) and written from this process (:func:`pipeline.compute.write_blocks`),
-    so a result never has to fit in memory. A crash or kill while writing leaves at most a
+    so a result never has to fit in memory (``progress``: a :class:`roughcontact.progress.Reporter`
+    showing the blocks written). A crash or kill while writing leaves at most a
     ``.tmp-*`` file, which is never read as a result (and is removed by :func:`clean_temporaries`).
     """
     from .compute import dask_variables, write_blocks
@@ -159,7 +160,7 @@ def write(ds: xr.Dataset, path: Path, compute_with="threads", progress_stream=No
         eager.to_netcdf(tmp, engine="netcdf4", encoding=cf.encoding(eager))
         if lazy:
             _define(tmp, ds, lazy)
-            write_blocks(tmp, ds, lazy, compute_with, progress_stream)
+            write_blocks(tmp, ds, lazy, compute_with, progress)
         with open(tmp, "rb+") as fh:
             os.fsync(fh.fileno())
         os.replace(tmp, path)

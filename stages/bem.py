@@ -158,11 +158,13 @@ def _solve_all(inp, band, q, C1, C2, E_star, p_values, eta_values, edges) -> dic
     out["histogram"] = np.empty(shape + (edges.shape[-1] - 1,))
     out["hrms"], out["slope"] = np.empty(shape[1:]), np.empty(shape[1:])
     order = np.argsort(p_values)  # increasing load: each solve starts from the previous one
+    tick = inp.progress("BEM solves", total=p_values.size * (1 if band["maps"] is not None else R * eta_values.size),
+                        unit="solve")
     for j, r, h1, h2 in pairs():
         out["hrms"][j, r] = float(np.std(h1 - h2))
         out["slope"][j, r] = rms_slope_of_map(h1 - h2, dx)
         res = solve_pair(h1, h2, dx, E_star, p_values[order], tolerance=inp["numerics.bem_tolerance"],
-                         stress_edges=edges[order, j])
+                         stress_edges=edges[order, j], progress=tick)
         for k in ("area", "mean_gap", "histogram", "overflow"):
             out[k][order, j, r] = res[k]
     return out

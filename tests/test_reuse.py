@@ -97,14 +97,14 @@ def test_switching_preset_and_back_computes_nothing(tmp_path, write_scene):
     scene = write_scene(make_scene(numerics=None))  # the preset sets the q grid's points per decade
     out = tmp_path / "out"
     first = _run(scene, out)
-    assert first.count("computing") == 2
-    assert _run(scene, out, preset="fast").count("computing") == 2
+    assert first.count("computed in") == 2
+    assert _run(scene, out, preset="fast").count("computed in") == 2
     plans = _plans(scene, out)
     assert all(p.status == "stale" and p.source is not None for p in plans.values())
     back = _run(scene, out)
-    assert "computing" not in back and back.count("reused") == 2
+    assert "computed in" not in back and back.count("reused") == 2
     assert {p.status for p in _plans(scene, out).values()} == {"fresh"}
-    assert "computing" not in _run(scene, out, preset="fast")  # and forth again
+    assert "computed in" not in _run(scene, out, preset="fast")  # and forth again
 
 
 def test_identical_stages_of_variants_are_computed_once(tmp_path, write_scene):
@@ -112,7 +112,7 @@ def test_identical_stages_of_variants_are_computed_once(tmp_path, write_scene):
                                              "same": {"load": {"p": {"from": "1 MPa", "to": "10 GPa", "num": 9}}}}))
     out = tmp_path / "out"
     log = _run(scene, out)
-    assert log.count("computing") == 3  # psd once; contact of the base (shared by 'same') and of 'softer'
+    assert log.count("computed in") == 3  # psd once; contact of the base (shared by 'same') and of 'softer'
     res = engine.run(scenes.load(scene), out, report=engine.Reporter(None))
     assert res["softer"]["psd"].attrs["stage_key"] == res["base"]["psd"].attrs["stage_key"]
     np.testing.assert_array_equal(res["same"]["contact"]["contact_area_ratio"], res["base"]["contact"]["contact_area_ratio"])
@@ -124,4 +124,4 @@ def test_forcing_a_stage_recomputes_it_even_when_a_kept_result_matches(tmp_path,
     out = tmp_path / "out"
     _run(scene, out)
     log = _run(scene, out, force=["contact"])
-    assert log.count("computing") == 1 and "reused" not in log
+    assert log.count("computed in") == 1 and "reused" not in log
