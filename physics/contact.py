@@ -9,9 +9,9 @@ Phys. 115, 3840 (2001).
 from __future__ import annotations
 
 import numpy as np
-from scipy.special import erf
 
 from .quadrature import integral_to
+from .special import erf
 
 
 def effective_modulus(E, nu):

@@ -19,7 +19,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import scipy.fft
 
 from .spectra import extend_psd, isotropic_factor
 from .synthesis import half_plane_weights, lattice_wavenumbers
@@ -123,6 +122,8 @@ def binned_spectra_area(h1, sx, sy, edges, q_max, h2=None):
     qsum = _bincount(idx, q * wfull, nb + 1)
     del q
     out = {}
+    import scipy.fft  # imported when a map is analysed, not with the stage declarations
+
     H1 = scipy.fft.rfft2(h1)
     P = H1.real**2 + H1.imag**2
     P *= w
@@ -185,6 +186,8 @@ def binned_spectra_profiles(h1, sx, edges, q_max, hurst, h2=None):
     conv[qx > 0] = isotropic_factor(hurst) / qx[qx > 0]
     count = np.bincount(idx, minlength=nb + 2)[: nb + 2] * float(nprof)
     qsum = np.bincount(idx, weights=qx * nprof, minlength=nb + 2)[: nb + 2]
+    import scipy.fft  # imported when a profile is analysed, not with the stage declarations
+
     H1 = scipy.fft.rfft(h1, axis=0)
     out = {"C11": (np.abs(H1) ** 2).sum(axis=1)}
     if h2 is not None:

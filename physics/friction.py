@@ -25,9 +25,9 @@ See docs/theory.md, section "Friction"; Persson, J. Chem. Phys. 115, 3840 (2001)
 from __future__ import annotations
 
 import numpy as np
-from scipy.special import erf
 
 from .quadrature import cumulative_integral, gauss_legendre, running_weighted_integral
+from .special import erf
 from .viscoelastic import modulus_at
 
 

@@ -27,9 +27,9 @@ from __future__ import annotations
 import functools
 
 import numpy as np
-from scipy.special import erf, erfcx, exp1
 
 from .quadrature import cumulative_integral, gauss_legendre_panels, integral_to, inverse_cumulative_integral
+from .special import erf, erfcx, exp1
 
 #: eps = exp(\\int_0^inf 2x ln x exp(-x^2) dx) = exp(-gamma_Euler / 2) = 0.749306..., seed eq 28.
 EPSILON = float(np.exp(-0.5 * np.euler_gamma))

@@ -17,6 +17,7 @@ import xarray as xr
 from . import reuse, store
 from .errors import UserError
 from .readers import READERS
+from .results import StageResults
 from .progress import Reporter
 from .schema import MISSING
 from .scene import Scene
@@ -235,8 +236,9 @@ LOAD_LIMIT_BYTES = 256 * 2**20
 
 
 def run(scene: Scene, outdir: Path, targets: Iterable[str] | None = None, force: Iterable[str] = (),
-        report: Reporter | None = None, scheduler: str | None = None) -> dict[str, dict[str, xr.Dataset]]:
-    """Bring every needed stage up to date; return ``results[variant][stage]``.
+        report: Reporter | None = None, scheduler: str | None = None) -> dict[str, StageResults]:
+    """Bring every needed stage up to date; return ``results[variant][stage]`` (Datasets, each
+    opened from its file when first read).
 
     ``scheduler`` overrides the scene's ``[run] scheduler`` ('threads', 'processes',
     'synchronous' or a dask.distributed address). Small results are returned in memory, large
@@ -255,7 +257,7 @@ def _run(scene, outdir, targets, force, report, compute_with):
     store.clean_temporaries(outdir)
     for folder in {p.path.parent for p in plans}:
         store.clean_temporaries(folder)
-    results: dict[str, dict[str, xr.Dataset]] = {v: {} for v in scenes}
+    results = {v: StageResults(_open) for v in scenes}  # each result opened when first read
     # read every input file and run every validation before anything computes or is written
     files: dict[int, dict] = {}
     for i, p in enumerate(plans):
@@ -269,12 +271,12 @@ def _run(scene, outdir, targets, force, report, compute_with):
         tag = f"[{i}/{n}] {p.label}"
         if p.status == "fresh":
             report(f"{tag}: up to date ({p.path})")
-            results[p.variant][p.stage.name] = _open(p.path)
+            results[p.variant].add(p.stage.name, p.path)
             continue
         if p.source is not None:
             reuse.place(p.source, p.path, outdir)
             report(f"{tag}: reused, not recomputed ({'; '.join(p.reasons)}) -> {p.path}")
-            results[p.variant][p.stage.name] = _open(p.path)
+            results[p.variant].add(p.stage.name, p.path)
             continue
         why = "; ".join(p.reasons)
         report.live(f"{tag}: computing ({why})")
@@ -295,7 +297,7 @@ def _run(scene, outdir, targets, force, report, compute_with):
         reuse.retire(p.path, outdir)  # the result it replaces stays reusable under its key
         store.write(ds, p.path, compute_with=compute_with, progress=report)
         report.finish()
-        results[p.variant][p.stage.name] = _open(p.path)
+        results[p.variant].add(p.stage.name, p.path)
         report(f"{tag}: computed in {time.perf_counter() - t0:.2f} s ({why}) -> {p.path}")
     reuse.prune(outdir, [p.path for p in plans])
     return results

@@ -27,6 +27,9 @@ class _Missing:
     def __repr__(self) -> str:
         return "<missing>"
 
+    def __reduce__(self):  # one object, also after a round trip through pickle (the scene cache)
+        return "MISSING"
+
 
 MISSING = _Missing()
 

@@ -206,9 +206,11 @@ def read_attrs(path: Path) -> dict | None:
     """Global attributes of a stored result, or None if the file is missing or unreadable."""
     if not Path(path).is_file():
         return None
+    import netCDF4  # directly: opening with xarray would import dask and pint for nothing
+
     try:
-        with xr.open_dataset(path) as ds:
-            return dict(ds.attrs)
+        with netCDF4.Dataset(path) as nc:
+            return {k: nc.getncattr(k) for k in nc.ncattrs()}
     except Exception:  # a truncated or foreign file is simply not a valid result
         return None
 
