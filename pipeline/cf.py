@@ -7,6 +7,9 @@
   chunks of at most :data:`CHUNK_BYTES` split along its leading (sweep) dimensions, its trailing
   dimension (q, stress levels, ...) kept whole where it fits.
 
+Compression costs write time (zlib runs in the writing process only): a scene can turn it off
+with ``[run] compress = false`` (the values are the same either way).
+
 Used by :func:`roughcontact.store.write` for both its paths (xarray's ``to_netcdf`` and the
 netCDF4 variables the block writer fills).
 """
@@ -40,24 +43,24 @@ def eager_chunks(shape: tuple[int, ...], itemsize: int, limit: int = CHUNK_BYTES
     return tuple(max(c, 1) for c in chunks)
 
 
-def encoding(ds: xr.Dataset) -> dict[str, dict]:
-    """``to_netcdf`` encodings of the in-memory variables of ``ds``."""
+def encoding(ds: xr.Dataset, compress: bool = True) -> dict[str, dict]:
+    """``to_netcdf`` encodings of the in-memory variables of ``ds`` (``compress``: large ones compressed)."""
     out: dict[str, dict] = {}
     for name, var in ds.variables.items():
         if name in ds.coords:
             out[name] = {"_FillValue": None}
-        elif var.ndim and var.nbytes >= COMPRESS_BYTES and var.dtype.kind in "fiuc":
+        elif compress and var.ndim and var.nbytes >= COMPRESS_BYTES and var.dtype.kind in "fiuc":
             out[name] = _compressed(var, eager_chunks(var.shape, var.dtype.itemsize))
     return out
 
 
-def lazy_variable(ds: xr.Dataset, name: str) -> dict:
+def lazy_variable(ds: xr.Dataset, name: str, compress: bool = True) -> dict:
     """``netCDF4.Dataset.createVariable`` keywords of a dask-backed variable: no fill value on a
     coordinate, NaN on floating-point data, compression in the variable's dask chunks."""
     var = ds[name].variable
     if name in ds.coords:
         return {"fill_value": False}
     kw = {"fill_value": np.nan if np.issubdtype(var.dtype, np.floating) else None}
-    if var.ndim and var.nbytes >= COMPRESS_BYTES:
+    if compress and var.ndim and var.nbytes >= COMPRESS_BYTES:
         kw.update(_compressed(var, tuple(max(c) for c in var.chunks)))
     return kw

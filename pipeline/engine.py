@@ -295,7 +295,8 @@ def _run(scene, outdir, targets, force, report, compute_with):
             computed = p.stage.compute(inp)
         ds = _finish(computed, p)
         reuse.retire(p.path, outdir)  # the result it replaces stays reusable under its key
-        store.write(ds, p.path, compute_with=compute_with, progress=report)
+        store.write(ds, p.path, compute_with=compute_with, progress=report,
+                    compress=scenes[p.variant].get("run.compress"))
         report.finish()
         results[p.variant].add(p.stage.name, p.path)
         report(f"{tag}: computed in {time.perf_counter() - t0:.2f} s ({why}) -> {p.path}")

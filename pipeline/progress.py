@@ -33,6 +33,11 @@ class Tick:
             with self._lock:
                 self._bar.update(n)
 
+    @property
+    def count(self) -> int:
+        """How far the bar has advanced (0 without a bar)."""
+        return self._bar.n if self._bar is not None else 0
+
     def close(self) -> None:
         if self._bar is not None:
             self._bar.close()

@@ -40,7 +40,10 @@ register_section(
         "run",
         (Param("scheduler", "str", default="threads",
                doc="where dask computes: 'threads', 'processes', 'synchronous', or the address of a "
-                   "dask.distributed scheduler (tcp://host:port); never part of a result's key"),),
+                   "dask.distributed scheduler (tcp://host:port); never part of a result's key"),
+         Param("compress", "bool", default=True,
+               doc="zlib-compress variables of 16 KiB and more (smaller files, slower writes: 1e8 contact areas "
+                   "shrink by a quarter; the values are the same either way)"),),
         doc="how the engine runs (does not change results)",
     )
 )

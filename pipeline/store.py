@@ -137,13 +137,13 @@ def _encodable(ds: xr.Dataset) -> xr.Dataset:
     return ds
 
 
-def write(ds: xr.Dataset, path: Path, compute_with="threads", progress=None) -> None:
+def write(ds: xr.Dataset, path: Path, compute_with="threads", progress=None, compress: bool = True) -> None:
     """Write ``ds`` to ``path`` atomically: a temporary file in the same folder, then a rename.
 
     Dask-backed variables are computed block by block by ``compute_with`` (a dask scheduler
     name or a distributed Client) and written from this process (:func:`pipeline.compute.write_blocks`),
     so a result never has to fit in memory (``progress``: a :class:`roughcontact.progress.Reporter`
-    showing the blocks written). A crash or kill while writing leaves at most a
+    showing the blocks written; ``compress``: large variables zlib-compressed, :mod:`roughcontact.cf`). A crash or kill while writing leaves at most a
     ``.tmp-*`` file, which is never read as a result (and is removed by :func:`clean_temporaries`).
     """
     from .compute import dask_variables, write_blocks
@@ -157,9 +157,9 @@ def write(ds: xr.Dataset, path: Path, compute_with="threads", progress=None) -> 
         ds = _encodable(ds)
         lazy = dask_variables(ds)
         eager = ds.drop_vars(lazy)
-        eager.to_netcdf(tmp, engine="netcdf4", encoding=cf.encoding(eager))
+        eager.to_netcdf(tmp, engine="netcdf4", encoding=cf.encoding(eager, compress))
         if lazy:
-            _define(tmp, ds, lazy)
+            _define(tmp, ds, lazy, compress)
             write_blocks(tmp, ds, lazy, compute_with, progress)
         with open(tmp, "rb+") as fh:
             os.fsync(fh.fileno())
@@ -176,7 +176,7 @@ def new_file_mode() -> int:
     return 0o666 & ~mask
 
 
-def _define(path, ds: xr.Dataset, names: list[str]) -> None:
+def _define(path, ds: xr.Dataset, names: list[str], compress: bool = True) -> None:
     """Declare the lazily computed variables in the file, with their attributes."""
     import netCDF4
 
@@ -186,7 +186,7 @@ def _define(path, ds: xr.Dataset, names: list[str]) -> None:
             for dim in var.dims:
                 if dim not in nc.dimensions:
                     nc.createDimension(dim, ds.sizes[dim])
-            target = nc.createVariable(name, var.dtype, var.dims, **cf.lazy_variable(ds, name))
+            target = nc.createVariable(name, var.dtype, var.dims, **cf.lazy_variable(ds, name, compress))
             target.setncatts(dict(var.attrs))
         coords = [n for n in names if n in ds.coords and n not in ds.dims]
         for name in ds.data_vars:

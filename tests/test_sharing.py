@@ -79,3 +79,17 @@ def test_provenance_names_the_version_and_the_commit(tmp_path):
     head = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "HEAD"], capture_output=True, text=True)
     if head.returncode == 0:  # a checkout: the commit is the one checked out (full or abbreviated)
         assert head.stdout.strip().startswith(attrs["git_commit"].removesuffix("-dirty"))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", sorted(scenes.builtin_scenes()))
+def test_every_builtin_scene_is_cf_clean(tmp_path, name):
+    pytest.importorskip("compliance_checker")
+    from cf_report import cf_errors, result_files
+
+    sc = scenes.load(name)
+    if any(p.stage.name == "bem" for p in engine.plan(sc, tmp_path)):
+        pytest.importorskip("tamaas")
+    engine.run(sc, tmp_path / "out", report=engine.Reporter(None))
+    found = {str(f.relative_to(tmp_path / "out")): cf_errors(f) for f in result_files(tmp_path / "out")}
+    assert found and found == {name: [] for name in found}
