@@ -40,9 +40,9 @@ __all__ = ["Results", "Scene", "StagePlan", "StageResults", "builtin_scenes", "l
 
 class Results(dict):
     """What :func:`run` returns: ``results[variant][stage]`` is a Dataset (``variant`` is
-    ``"base"`` or a name of the scene's ``[variants]``; a stage's Dataset is opened from its file
-    when first read). ``outdir`` is where the files are; ``results[variant].path(stage)`` gives a
-    stage's file."""
+    ``"base"`` or a name of the scene's ``[variants]``), loaded into memory (one larger than
+    256 MB opened lazily, with dask). ``outdir`` is where the files are;
+    ``results[variant].path(stage)`` gives a stage's file."""
 
     def __init__(self, by_variant: Mapping[str, StageResults], outdir: Path):
         super().__init__(by_variant)

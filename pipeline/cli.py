@@ -95,7 +95,7 @@ def _scene_command(args, sc) -> int:
         return 1 if any(p.status != "fresh" for p in plans) else 0
     reporter = engine.Reporter(sys.stderr, bars=False if getattr(args, "quiet", False) else None)
     if args.command == "run":
-        engine.run(sc, outdir, force=args.force, report=reporter, scheduler=args.scheduler)
+        engine.run(sc, outdir, force=args.force, report=reporter, scheduler=args.scheduler, open_results=False)
         print(f"results in {outdir}")
         return 0
     if args.command == "plot":

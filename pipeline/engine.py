@@ -236,9 +236,12 @@ LOAD_LIMIT_BYTES = 256 * 2**20
 
 
 def run(scene: Scene, outdir: Path, targets: Iterable[str] | None = None, force: Iterable[str] = (),
-        report: Reporter | None = None, scheduler: str | None = None) -> dict[str, StageResults]:
-    """Bring every needed stage up to date; return ``results[variant][stage]`` (Datasets, each
-    opened from its file when first read).
+        report: Reporter | None = None, scheduler: str | None = None,
+        open_results: bool = True) -> dict[str, StageResults]:
+    """Bring every needed stage up to date; return ``results[variant][stage]``.
+
+    With ``open_results`` every result is opened before this returns (in memory if small, so that
+    it outlives its file); False opens each only when first read (the command line reads none).
 
     ``scheduler`` overrides the scene's ``[run] scheduler`` ('threads', 'processes',
     'synchronous' or a dask.distributed address). Small results are returned in memory, large
@@ -248,7 +251,10 @@ def run(scene: Scene, outdir: Path, targets: Iterable[str] | None = None, force:
 
     report = report or Reporter()
     with open_scheduler(scheduler or scene.get("run.scheduler")) as compute_with:
-        return _run(scene, outdir, targets, force, report, compute_with)
+        results = _run(scene, outdir, targets, force, report, compute_with)
+    for by_stage in results.values() if open_results else ():
+        by_stage.open_all()
+    return results
 
 
 def _run(scene, outdir, targets, force, report, compute_with):

@@ -27,6 +27,11 @@ class StageResults(Mapping[str, xr.Dataset]):
         self._paths[stage] = Path(path)
         self._open.pop(stage, None)
 
+    def open_all(self) -> None:
+        """Open every result now (small ones into memory, independent of their files)."""
+        for stage in self._paths:
+            self[stage]
+
     def path(self, stage: str) -> Path:
         return self._paths[stage]
 
