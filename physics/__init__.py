@@ -16,6 +16,8 @@ adhesion     full-contact adhesion (effective surface energy)
 volterra     partial-contact adhesion (the marching Volterra solver)
 viscoelastic complex modulus models and temperature shifts
 friction     viscoelastic (hysteretic) rubber friction
+flash        flash temperature of rubber friction (marched in q) and background heating
+mastercurve  master curves from DMA sweeps: shifts, WLF fit, relaxation spectrum, Kramers-Kronig check
 estimators   spectral estimators on measured maps and profiles (PSD, coherence)
 preprocessing  detrending, windows and the tip-radius cutoff of measured scans
 synthesis    random periodic surface pairs with given spectra and coherence; band limit of a map

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .inputs import require_pressure
 from .quadrature import cumulative_integral, gauss_legendre, running_weighted_integral
 from .special import erf
 from .viscoelastic import modulus_at
@@ -33,7 +34,7 @@ from .viscoelastic import modulus_at
 
 def _k(sigma0, nu):
     """k = 1 / ((1 - nu^2) sigma0) (1/Pa)."""
-    return 1.0 / ((1.0 - nu * nu) * np.asarray(sigma0, dtype=float))
+    return 1.0 / ((1.0 - nu * nu) * require_pressure(sigma0, "sigma0", positive=True))
 
 
 def angular_integrals(q, v, omega_grid, storage, loss, n_phi):

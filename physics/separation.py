@@ -28,6 +28,7 @@ import functools
 
 import numpy as np
 
+from .inputs import require_pressure
 from .quadrature import cumulative_integral, gauss_legendre_panels, integral_to, inverse_cumulative_integral
 from .special import erf, erfcx, exp1
 
@@ -364,7 +365,7 @@ def mean_separation(p, s, weight, count, s_tail, q_tail, *, E_star, alpha, refin
     docs/theory.md, section "Separation"; Persson, J. Chem. Phys. 115, 3840 (2001); Yang & Persson,
     J. Phys.: Condens. Matter 20, 215214 (2008).
     """
-    a = np.asarray(p, dtype=float)[..., None] / E_star
+    a = require_pressure(p, positive=True)[..., None] / E_star
     with np.errstate(divide="ignore", over="ignore", under="ignore"):
         z = np.where(s > 0, a / np.where(s > 0, s, 1.0), np.inf)
         x = z * z

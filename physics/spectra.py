@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import special
+from .inputs import require_coherence
 from .quadrature import integral, loglog_interp
 
 
@@ -86,7 +87,7 @@ def psd_combined(C1, C2, eta):
     """
     C1 = np.asarray(C1, dtype=float)
     C2 = np.asarray(C2, dtype=float)
-    eta = np.asarray(eta, dtype=float)
+    eta = require_coherence(eta)
     return (np.sqrt(C1) - eta * np.sqrt(C2)) ** 2 + (1.0 - eta * eta) * C2
 
 

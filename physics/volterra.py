@@ -30,6 +30,7 @@ import numpy as np
 from roughcontact.errors import ComputationError
 
 from .adhesion import AdhesionProblem
+from .inputs import require_pressure
 from .roots import illinois
 from .spectra import hrms_from_psd, psd_combined
 
@@ -287,6 +288,7 @@ def solve_partial_contact(prob, sigma0, c0, c1, K_min=1e-8, tol=1e-10, maxiter=8
         attached (B,), node_residual (B,). Raises ComputationError (with a ``failed`` mask
         over the batch) if the root does not converge.
     """
+    require_pressure(sigma0, "sigma0")
     B = prob.a.shape[0]
     c0 = np.broadcast_to(np.asarray(c0, dtype=float), (B,))
     c1 = np.broadcast_to(np.asarray(c1, dtype=float), (B,))

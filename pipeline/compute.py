@@ -20,6 +20,7 @@ from typing import Iterator, Mapping
 import numpy as np
 import xarray as xr
 
+from . import ncio
 from .errors import UserError
 from .progress import Tick
 
@@ -94,7 +95,7 @@ def dask_variables(ds: xr.Dataset) -> list[str]:
 
 
 def write_blocks(path, ds: xr.Dataset, names: list[str], compute_with, progress=None,
-                 in_flight: int | None = None) -> None:
+                 in_flight: int | None = None, checksums=None) -> None:
     """Compute the dask variables ``names`` of ``ds`` block by block and write them into the
     existing NetCDF file ``path`` (whose other variables are already written); ``progress`` (a
     :class:`roughcontact.progress.Reporter`) shows the blocks written.
@@ -103,7 +104,6 @@ def write_blocks(path, ds: xr.Dataset, names: list[str], compute_with, progress=
     (an integral over q, say) is done once per block.
     """
     import dask  # imported here: a run with nothing to compute never needs it
-    import netCDF4
 
     groups: dict[tuple, list[str]] = {}
     for name in names:
@@ -115,10 +115,11 @@ def write_blocks(path, ds: xr.Dataset, names: list[str], compute_with, progress=
     if in_flight is None:
         workers = len(client.scheduler_info()["workers"]) if client is not None else (dask.system.CPU_COUNT or 2)
         in_flight = max(2, 2 * workers)
-    with netCDF4.Dataset(path, "a") as nc:
+    with ncio.dataset(path, "a") as nc:  # every call into netCDF/HDF5 under the process-wide lock (ncio)
         for (dims, chunks), group in groups.items():
             offsets = [np.concatenate([[0], np.cumsum(c)]) for c in chunks]
-            targets = [nc.variables[name] for name in group]
+            with ncio.locked():
+                targets = [nc.variables[name] for name in group]
             arrays = [ds[name].data for name in group]
             indices = itertools.product(*(range(len(c)) for c in chunks))
 
@@ -137,6 +138,10 @@ def write_blocks(path, ds: xr.Dataset, names: list[str], compute_with, progress=
                     results = dask.compute(*tasks, scheduler=compute_with)
                 for idx, values in zip(batch, results):
                     sl = region(idx)
-                    for target, value in zip(targets, values):
-                        target[sl] = np.asarray(value)
+                    with ncio.locked():
+                        for target, value in zip(targets, values):
+                            target[sl] = np.asarray(value)
+                    if checksums is not None:
+                        for name, value in zip(group, values):
+                            checksums.add(name, np.asarray(value), [s.start for s in sl])
                     bar()

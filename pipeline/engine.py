@@ -14,11 +14,10 @@ from typing import Iterable
 
 import xarray as xr
 
-from . import reuse, store
+from . import integrity, preflight, reuse, store
 from .errors import UserError
-from .readers import READERS
-from .results import StageResults
 from .progress import Reporter
+from .results import StageResults
 from .schema import MISSING
 from .scene import Scene
 from .stage import Stage, StageInput, coords, producer_of, stages
@@ -79,10 +78,15 @@ def default_outdir(scene: Scene) -> Path:
     return Path("outputs") / scene.name
 
 
-def plan(scene: Scene, outdir: Path, targets: Iterable[str] | None = None, force: Iterable[str] = ()) -> list[StagePlan]:
-    """Plan every needed stage of the scene and of each of its variants."""
+def plan(scene: Scene, outdir: Path, targets: Iterable[str] | None = None, force: Iterable[str] = (),
+         verify: bool | None = None) -> list[StagePlan]:
+    """Plan every needed stage of the scene and of each of its variants.
+
+    A stored result with the right key is fresh if its data still match their checksum
+    (:mod:`roughcontact.integrity`), checked for files up to ``integrity.VERIFY_LIMIT_BYTES``
+    (``verify`` None), for every file (True) or for none (False)."""
+    scene, outdir, targets, force = preflight.arguments(scene, outdir, targets, force)
     targets = tuple(targets) if targets is not None else scene.outputs
-    force = set(force)
     unknown = force - set(stages()) - {"all"}
     if unknown:
         raise UserError(f"--force names unknown stage(s): {', '.join(sorted(unknown))}")
@@ -91,7 +95,7 @@ def plan(scene: Scene, outdir: Path, targets: Iterable[str] | None = None, force
     for variant, sc in (("base", scene), *scene.variants.items()):
         keys: dict[str, str] = {}
         for st in needed_stages(sc, targets):
-            p = _plan_stage(sc, variant, st, outdir, keys, targets, force)
+            p = _plan_stage(sc, variant, st, outdir, keys, targets, force, verify)
             keys[st.name] = p.key
             if p.status != "fresh" and not force & {st.name, "all"}:
                 _find_identical(p, earlier, outdir)
@@ -110,7 +114,7 @@ def _find_identical(p: StagePlan, earlier: dict[str, Path], outdir: Path) -> Non
         p.reasons.append("an identical result of an earlier run is kept")
 
 
-def _plan_stage(scene, variant, st, outdir, keys, targets, force) -> StagePlan:
+def _plan_stage(scene, variant, st, outdir, keys, targets, force, verify=None) -> StagePlan:
     params = {name: st.section_view(name, scene.get(name)) for name in st.params}
     absent = [name for name, value in params.items() if value is MISSING]
     if absent:
@@ -122,10 +126,10 @@ def _plan_stage(scene, variant, st, outdir, keys, targets, force) -> StagePlan:
             continue
         if isinstance(value, (list, tuple)):  # a `paths` parameter: several files, read one by one
             file_paths[f.param] = tuple(Path(v) for v in value)
-            inputs += [reuse.input_entry(f"{f.param}[{i}]", v, scene.path) for i, v in enumerate(value)]
+            inputs += [reuse.input_entry(f"{f.param}[{i}]", v, scene.path, f.param) for i, v in enumerate(value)]
             continue
         file_paths[f.param] = Path(value)
-        inputs.append(reuse.input_entry(f.param, value, scene.path))
+        inputs.append(reuse.input_entry(f.param, value, scene.path, f.param))
     upstream = {up: keys[up] for up in (st.needed(scene.values) if st.needed else st.requires)}
     wanted = frozenset(t for t in targets if t in st.outputs and st.outputs[t].optional)
     record = {
@@ -139,11 +143,14 @@ def _plan_stage(scene, variant, st, outdir, keys, targets, force) -> StagePlan:
     key = store.content_key(record)
     record["paths"] = {i["param"]: i["path"] for i in inputs}  # for messages only: not part of the key
     path = result_path(outdir, variant, st.name)
+    if path.exists() and not path.is_file():
+        raise UserError(f"is not a file, but the result of stage {st.name} goes there: move it away", file=str(path))
     stored = store.read_attrs(path)
     if stored is None:
         status, reasons = "missing", ["no result yet" if not path.exists() else "existing file is unreadable"]
     elif stored.get("stage_key") == key and st.name not in force and "all" not in force:
-        status, reasons = "fresh", []
+        damage = integrity.damage(path, verify)
+        status, reasons = ("stale", [damage]) if damage else ("fresh", [])
     else:
         status = "stale"
         reasons = _why_stale(stored, record) if stored.get("stage_key") != key else ["forced"]
@@ -232,12 +239,13 @@ def _finish(ds: xr.Dataset, p: StagePlan) -> xr.Dataset:
 
 
 #: results larger than this many bytes are handed downstream lazily (dask-backed), not loaded
-LOAD_LIMIT_BYTES = 256 * 2**20
+LOAD_LIMIT_BYTES = preflight.LOAD_LIMIT_BYTES
 
 
 def run(scene: Scene, outdir: Path, targets: Iterable[str] | None = None, force: Iterable[str] = (),
         report: Reporter | None = None, scheduler: str | None = None,
-        open_results: bool = True) -> dict[str, StageResults]:
+        open_results: bool = True, lock_timeout: float | None = None,
+        verify: bool | None = None) -> dict[str, StageResults]:
     """Bring every needed stage up to date; return ``results[variant][stage]``.
 
     With ``open_results`` every result is opened before this returns (in memory if small, so that
@@ -245,33 +253,31 @@ def run(scene: Scene, outdir: Path, targets: Iterable[str] | None = None, force:
 
     ``scheduler`` overrides the scene's ``[run] scheduler`` ('threads', 'processes',
     'synchronous' or a dask.distributed address). Small results are returned in memory, large
-    ones lazily.
+    ones lazily. The run holds the output folder's lock (:mod:`roughcontact.preflight`); another
+    run on the same folder waits for it (at most ``lock_timeout`` seconds, None: until it ends).
+    ``verify``: check the checksums of reused results of every size (see :func:`plan`).
     """
     from .compute import scheduler as open_scheduler
 
+    scene, outdir, targets, force = preflight.arguments(scene, outdir, targets, force)
     report = report or Reporter()
-    with open_scheduler(scheduler or scene.get("run.scheduler")) as compute_with:
-        results = _run(scene, outdir, targets, force, report, compute_with)
+    outdir = preflight.output_folder(outdir)
+    with preflight.locked(outdir, report, lock_timeout), open_scheduler(scheduler or scene.get("run.scheduler")) as compute_with:
+        results = _run(scene, outdir, targets, force, report, compute_with, verify)
     for by_stage in results.values() if open_results else ():
         by_stage.open_all()
     return results
 
 
-def _run(scene, outdir, targets, force, report, compute_with):
-    plans = plan(scene, outdir, targets, force)
+def _run(scene, outdir, targets, force, report, compute_with, verify=None):
+    plans = plan(scene, outdir, targets, force, verify)
     scenes = {"base": scene, **scene.variants}
     store.clean_temporaries(outdir)
     for folder in {p.path.parent for p in plans}:
         store.clean_temporaries(folder)
     results = {v: StageResults(_open) for v in scenes}  # each result opened when first read
-    # read every input file and run every validation before anything computes or is written
-    files: dict[int, dict] = {}
-    for i, p in enumerate(plans):
-        if p.status == "fresh" or p.source is not None:
-            continue
-        files[i] = {param: _read(p.stage, param, path, p.params) for param, path in p.file_paths.items()}
-        if p.stage.validate is not None:
-            p.stage.validate(StageInput(params=p.params, files=files[i], wanted=p.wanted, stage=p.stage.name))
+    # read every input file, run every validation and check every size before anything computes or is written
+    files, previews = preflight.validate(plans, scenes, outdir)
     n = len(plans)
     for i, p in enumerate(plans, start=1):
         tag = f"[{i}/{n}] {p.label}"
@@ -293,7 +299,8 @@ def _run(scene, outdir, targets, force, report, compute_with):
             upstream=upstream,
             files=files[i - 1],
             wanted=p.wanted,
-            chunks=stage_chunks(scenes[p.variant], p.stage, p.params, p.wanted, upstream),
+            chunks=stage_chunks(scenes[p.variant], p.stage, p.params, p.wanted,
+                                {**upstream, **_own(previews, p)}),
             stage=p.stage.name,
             reporter=report,
         )
@@ -329,12 +336,12 @@ def _open(path: Path) -> xr.Dataset:
     """A stored result: in memory if small, else opened lazily with the file's own chunking."""
     if path.stat().st_size <= LOAD_LIMIT_BYTES:
         return store.open_result(path)
-    return xr.open_dataset(path, chunks={})
+    from .ncio import open_lazily
+
+    return open_lazily(path)
 
 
-def _read(st: Stage, param: str, path, params):
-    """One loaded file, or a list of them for a ``paths`` parameter."""
-    spec = next(f for f in st.files if f.param == param)
-    reader = READERS[spec.reader]
-    options = dict(spec.options(params)) if spec.options is not None else {}
-    return [reader(p, **options) for p in path] if isinstance(path, tuple) else reader(path, **options)
+def _own(previews, p: StagePlan) -> dict:
+    """The stage's own preview (from its validate hook), for its point_bytes hook."""
+    own = previews.get((p.variant, p.stage.name))
+    return {p.stage.name: own} if own is not None and p.status != "fresh" else {}

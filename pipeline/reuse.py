@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Any, Mapping
 
 from . import store
+from .errors import UserError
 
 #: folder of kept results inside an output folder
 RESULTS = ".results"
@@ -54,9 +55,14 @@ def shown_path(path: Path, scene_path: Path | None) -> str:
     return str(path)
 
 
-def input_entry(param: str, path: Path, scene_path: Path | None) -> dict:
-    """One ``input_files`` record: the scene key, the path as shown, the content hash."""
-    return {"param": param, "path": shown_path(path, scene_path), "sha256": store.file_sha256(Path(path))}
+def input_entry(param: str, path: Path, scene_path: Path | None, key: str | None = None) -> dict:
+    """One ``input_files`` record: the scene key, the path as shown, the content hash. An
+    unreadable file is the user's error, naming the file and the scene key ``key``."""
+    try:
+        digest = store.file_sha256(Path(path))
+    except OSError as exc:
+        raise UserError(f"cannot read: {exc.strerror or exc}", file=str(path), key=key or param) from None
+    return {"param": param, "path": shown_path(path, scene_path), "sha256": digest}
 
 
 def _kept(outdir: Path, key: str) -> Path:

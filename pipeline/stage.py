@@ -7,7 +7,7 @@ hashing, caching, I/O, chunking and scheduling; a stage does none of these.
 
 This module is the whole API a stage module uses (with :mod:`roughcontact.physics` for the
 numbers): :class:`Stage`, :class:`Var`, :class:`FileInput`, :class:`Figure`,
-:class:`StageInput`, :class:`Param`, :class:`Section`, :func:`register`,
+:class:`StageInput`, :class:`Preview`, :class:`Param`, :class:`Section`, :func:`register`,
 :func:`register_section`, :func:`register_params`, :func:`register_coords` and the errors.
 
 Metadata has one source. A variable's units and long name are written once, in its
@@ -31,8 +31,8 @@ from .errors import ComputationError, UserError
 from .schema import MISSING, REQUIRED, Param, Section
 
 __all__ = [
-    "ComputationError", "FileInput", "Figure", "MISSING", "Param", "REQUIRED", "Section", "SectionKeys", "Stage",
-    "StageInput",
+    "ComputationError", "FileInput", "Figure", "MISSING", "Param", "Preview", "REQUIRED", "Section", "SectionKeys",
+    "Stage", "StageInput",
     "UserError", "Var", "coords", "register", "register_coords", "register_params", "register_section",
 ]
 
@@ -118,11 +118,23 @@ class Stage:
     #: parameters, the optional outputs asked for and the upstream results (lazy or small);
     #: the engine sizes chunks with it (default 512)
     point_bytes: Callable[[Mapping[str, Any], frozenset, Mapping[str, xr.Dataset]], int] | None = None
-    #: optional ``validate(StageInput) -> None``: checks that can fail on the user's input (a file's
-    #: contents, a missing optional package) without computing; the engine runs it for every stage
-    #: about to compute, before any of them computes, so a bad input writes nothing at all.
-    #: ``inp.upstream`` is empty there.
-    validate: Callable[["StageInput"], None] | None = None
+    #: optional ``check(StageInput) -> None``: checks of the stage's own scene keys and files alone
+    #: (``inp.upstream`` is empty); the engine runs every stage's check before any stage's validate, so
+    #: that a cause (two maps on different grids) is reported before its consequences downstream
+    check: Callable[["StageInput"], None] | None = None
+    #: optional ``validate(StageInput) -> Preview | None``: every check that can fail on the user's
+    #: input (scene keys, a file's contents, a missing optional package), without computing; the engine
+    #: runs it for every stage about to compute, upstream first, before any of them computes, so a bad
+    #: input writes nothing at all. ``inp.upstream[name]`` is a :class:`Preview` of each upstream
+    #: result (of the stored file when it is fresh, else what the upstream stage's validate returned):
+    #: its dimensions' sizes and coordinate ranges, never data. Return a :class:`Preview` of this
+    #: stage's own result (the dimensions it adds, e.g. the q grid) for the checks and size estimates
+    #: downstream.
+    validate: Callable[["StageInput"], "Preview | None"] | None = None
+    #: optional ``result_bytes(params, wanted, sizes) -> int``: bytes of the stored result given the
+    #: sizes of all its dimensions (sweep dims and the ones the stage adds); default: every output
+    #: variable over every dimension (an upper bound)
+    result_bytes: Callable[[Mapping[str, Any], frozenset, Mapping[str, int]], int] | None = None
     #: the outputs whose error ``roughcontact accuracy`` measures (default: none: not measured)
     main_outputs: tuple[str, ...] = ()
     #: the relative error the default preset must reach on ``main_outputs``
@@ -174,6 +186,42 @@ class SectionKeys(dict):
 
     def __reduce__(self):  # picklable for process and distributed schedulers
         return (SectionKeys, (dict(self), self.hidden, self.where))
+
+
+@dataclass(frozen=True)
+class Preview:
+    """What a stage's result will look like, known before it computes (no data).
+
+    ``sizes``: dimension -> length; ``ranges``: coordinate or 1-D variable -> (lowest, highest
+    finite value); ``variables``: the data variables it will hold; ``attrs``: global attributes
+    known in advance; ``keys``: the scene key that sets each dimension's size. A stage's ``validate`` hook returns one for its own result; downstream
+    ``validate`` hooks and the size estimates read it as ``inp.upstream[stage]``.
+    """
+
+    sizes: Mapping[str, int] = field(default_factory=dict)
+    ranges: Mapping[str, tuple[float, float]] = field(default_factory=dict)
+    variables: frozenset = frozenset()
+    attrs: Mapping[str, Any] = field(default_factory=dict)
+    #: the scene key that sets the size of each dimension the stage adds (e.g. {"q":
+    #: "numerics.points_per_decade"}), named when a result would be too large for the machine
+    keys: Mapping[str, str] = field(default_factory=dict)
+    #: the values of (small) 1-D coordinates, where known in advance (e.g. the magnifications)
+    coords: Mapping[str, np.ndarray] = field(default_factory=dict)
+
+    @classmethod
+    def of(cls, ds: xr.Dataset, small: int = 10**6) -> "Preview":
+        """The preview of a stored result (its coordinates and small 1-D variables are read)."""
+        ranges, coords = {}, {}
+        for name, var in ds.variables.items():
+            if var.ndim == 1 and var.size <= small and var.dtype.kind in "fiu":
+                values = np.asarray(var.values, dtype=float)
+                finite = values[np.isfinite(values)]
+                if finite.size:
+                    ranges[str(name)] = (float(finite.min()), float(finite.max()))
+                if name in ds.coords and var.dims == (name,):
+                    coords[str(name)] = values
+        return cls(sizes={str(k): int(v) for k, v in ds.sizes.items()}, ranges=ranges,
+                   variables=frozenset(str(v) for v in ds.data_vars), attrs=dict(ds.attrs), coords=coords)
 
 
 @dataclass
@@ -290,7 +338,7 @@ def register_params(section_name: str, *params: Param, doc: str = "") -> None:
             raise ValueError(f"parameter {section_name}.{p.name} registered twice")
         names.add(p.name)
     new = tuple(p for p in params if p not in current.params)
-    _SECTIONS[section_name] = dataclasses.replace(current, params=current.params + new)
+    _SECTIONS[section_name] = dataclasses.replace(current, params=current.params + new, doc=current.doc or doc)
 
 
 def stages() -> dict[str, Stage]:

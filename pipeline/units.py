@@ -40,7 +40,8 @@ def is_dimensionless(units: str) -> bool:
     return units in ("", "1") or _unit(units, None).dimensionless
 
 
-def to_si(value, units: str, *, key: str | None = None, default_unit: str | None = None) -> float:
+def to_si(value, units: str, *, key: str | None = None, default_unit: str | None = None,
+          difference: bool = False) -> float:
     """Convert a scalar quantity to a float in the SI ``units``.
 
     Parameters
@@ -54,12 +55,16 @@ def to_si(value, units: str, *, key: str | None = None, default_unit: str | None
         The scene key, for the error message.
     default_unit
         Unit of a bare number (e.g. from a ``unit =`` entry next to a list).
+    difference
+        The quantity is a difference (e.g. a temperature difference, WLF's C2): offset units
+        are read as their differences ("51.6 degC" is 51.6 K, pint's ``delta_degC``), never
+        as absolute temperatures (324.75 K).
     """
     if isinstance(value, bool):
         raise UserError(f"expected a quantity in {units or 'dimensionless'} units, got {value!r}", key=key)
     if isinstance(value, (int, float, np.number)):
         if default_unit is not None:
-            return _convert(float(value), default_unit, units, key)
+            return _convert(float(value), default_unit, units, key, difference)
         if is_dimensionless(units):
             return float(value)
         raise UserError(
@@ -73,18 +78,30 @@ def to_si(value, units: str, *, key: str | None = None, default_unit: str | None
     number, unit_text = float(m.group(1)), m.group(2)
     if not unit_text:
         if default_unit is not None:
-            return _convert(number, default_unit, units, key)
+            return _convert(number, default_unit, units, key, difference)
         if is_dimensionless(units):
             return number
         raise UserError(
             f"{value!r} has no units; write it with units, e.g. \"{value} {_example_unit(units)}\"", key=key
         )
-    return _convert(number, unit_text, units, key)
+    return _convert(number, unit_text, units, key, difference)
 
 
-def _convert(number: float, unit_text: str, units: str, key: str | None) -> float:
+def _as_difference(unit: pint.Unit) -> pint.Unit:
+    """The unit of a difference: each offset unit (degC, degF) replaced by its delta unit."""
+    from pint.util import UnitsContainer
+
+    ureg = registry()
+    parts = {(name if ureg.Quantity(1.0, name)._is_multiplicative else f"delta_{name}"): exp
+             for name, exp in unit._units.items()}
+    return ureg.Unit(UnitsContainer(parts))
+
+
+def _convert(number: float, unit_text: str, units: str, key: str | None, difference: bool = False) -> float:
     ureg = registry()
     src = _unit(unit_text, key)
+    if difference:
+        src = _as_difference(src)
     dst = _unit(units, key) if units not in ("", "1") else ureg.dimensionless
     from pint import DimensionalityError
 

@@ -18,7 +18,7 @@ from roughcontact.physics.adhesion import (
 )
 from roughcontact.physics.volterra import solve_partial_contact, vanishing_hrms_from_sweep
 from roughcontact.stage import (
-    ComputationError, Figure, Param, Section, Stage, StageInput, UserError, Var, register, register_params,
+    ComputationError, Figure, Param, Preview, Section, Stage, StageInput, UserError, Var, register, register_params,
     register_section,
 )
 
@@ -165,6 +165,25 @@ def _models(spec):
     return model, c0, c1
 
 
+def validate_adhesion(inp: StageInput) -> Preview:
+    """Before anything computes: the binding energy is given and the vanishing hrms can be sought
+    (zero load, a substrate hrms sweep); returns the nominal size of the Volterra grid."""
+    spec = inp["adhesion"]
+    _binding_energy(spec, e_star(inp))
+    psd = inp.upstream["psd"]
+    if spec["vanishing_hrms"]:
+        if spec["sigma0"] != 0:
+            raise UserError("the hrms at which adhesion vanishes is defined at zero load: set adhesion.sigma0 = 0 "
+                            "or adhesion.vanishing_hrms = false", key="adhesion.vanishing_hrms")
+        if psd.sizes.get("hrms_substrate", 0) < 2:
+            raise UserError("needs substrate.hrms as a sweep (a list or {from, to, num}) that reaches detachment",
+                            key="adhesion.vanishing_hrms")
+    lo, hi = psd.ranges["q"]
+    nodes = zeta_grid(hi / lo, inp["numerics.adhesion_points_per_decade"], inp["numerics.adhesion_zeta_offset"])
+    return Preview(sizes={"zeta": int(nodes.size), **({"model": len(spec["model"])} if len(spec["model"]) > 1 else {})},
+                   keys={"zeta": "numerics.adhesion_points_per_decade", "model": "adhesion.model"})
+
+
 def compute_adhesion(inp: StageInput) -> xr.Dataset:
     psd = inp.upstream["psd"]
     q = psd["q"].values
@@ -215,13 +234,8 @@ def _vanishing_kernel(K, C1, C2, eta, c0, c1, *, hs, **kwargs):
 
 
 def _vanishing(ds, psd, c0, c1, q, E_star, dg, nodes, K_min, tol, sigma0, progress=None):
-    """The substrate hrms at which adhesion vanishes, per case; a UserError when the sweep does not bracket it."""
-    if sigma0 != 0:
-        raise UserError("the hrms at which adhesion vanishes is defined at zero load: set adhesion.sigma0 = 0 "
-                        "or adhesion.vanishing_hrms = false", key="adhesion.vanishing_hrms")
-    if "hrms_substrate" not in psd["psd_combined"].dims or psd.sizes["hrms_substrate"] < 2:
-        raise UserError("needs substrate.hrms as a sweep (a list or {from, to, num}) that reaches detachment",
-                        key="adhesion.vanishing_hrms")
+    """The substrate hrms at which adhesion vanishes, per case (zero load and an hrms sweep: checked by
+    validate_adhesion); a UserError when the sweep does not bracket it."""
     hs = psd["hrms_substrate"].values
     order = np.argsort(hs)
     K = ds["gamma_eff_macroscopic"].isel(hrms_substrate=order)
@@ -265,6 +279,7 @@ register(
         name="adhesion",
         version="1",
         compute=compute_adhesion,
+        validate=validate_adhesion,
         requires=("psd",),
         main_outputs=("hrms_substrate_vanishing",),
         tolerance=1e-3,

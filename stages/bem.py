@@ -84,27 +84,58 @@ def solve_pair(h1, h2, pixel_size, E_star, pressures, **kwargs):
             f"pixel or less (tamaas: {exc.detail}); use larger pressures or a finer bem.grid", key="load.p") from None
 
 
+def _zeta_index(values, zeta: float, stage: str, set_by: str) -> int:
+    """Where the theory stage's magnifications hold the BEM's zeta; a UserError if they do not."""
+    hit = np.flatnonzero(np.isclose(np.atleast_1d(values), zeta, rtol=1e-9, atol=0.0))
+    if hit.size == 0:
+        raise UserError(
+            f"the {stage} stage has no magnification zeta = {zeta:.10g}, the band the BEM map resolves "
+            f"(q_cut / qL, set by {set_by}); add {zeta:.10g} to contact.zeta", key="contact.zeta")
+    return int(hit[0])
+
+
 def _at_zeta(ds: xr.Dataset, var: str, zeta: float, stage: str, set_by: str) -> xr.DataArray:
     """A theory variable at the BEM's magnification, which the stage must have computed."""
     da = ds[var]
     if "zeta" not in da.dims and "zeta" not in da.coords:
         return da
-    values = np.atleast_1d(da["zeta"].values)
-    hit = np.flatnonzero(np.isclose(values, zeta, rtol=1e-9, atol=0.0))
-    if hit.size == 0:
-        raise UserError(
-            f"the {stage} stage has no magnification zeta = {zeta:.10g}, the band the BEM map resolves "
-            f"(q_cut / qL, set by {set_by}); add {zeta:.10g} to contact.zeta", key="contact.zeta")
-    return da.isel(zeta=int(hit[0])) if "zeta" in da.dims else da
+    index = _zeta_index(da["zeta"].values, zeta, stage, set_by)
+    return da.isel(zeta=index) if "zeta" in da.dims else da
 
 
-def validate_bem(inp: StageInput) -> None:
-    """Before anything computes: the optional dependency must be there, and measured maps usable."""
+def _single_surfaces(sizes) -> None:
+    """The BEM solves one pair of surfaces: no hrms sweep."""
+    for name in ("substrate", "solid"):
+        if sizes.get(f"hrms_{name}", 1) > 1:
+            raise UserError(f"the bem stage does not sweep hrms_{name}: give a single value", key=f"{name}.hrms")
+
+
+def check_bem(inp: StageInput) -> None:
+    """Before anything else is checked: the optional dependency, and usable measured maps."""
     solver()
     names = map_surfaces(inp)
     check_eta(inp, names)
     if names:
         measured_maps(inp, names)
+
+
+def validate_bem(inp: StageInput) -> None:
+    """Before anything computes: one pair of surfaces, and the BEM's magnification among those the
+    contact and separation stages compute."""
+    psd = inp.upstream["psd"]
+    _single_surfaces(psd.sizes)
+    names = map_surfaces(inp)
+    lo, hi = psd.ranges["q"]
+    n_w = inp["bem.pixels_per_wavelength"]
+    if names:
+        maps = measured_maps(inp, names)
+        _, zeta, limit = map_band(lo, hi, maps["n"], maps["side"], maps["q_reliable"], n_w)
+    else:
+        zeta, limit = grid_band(lo, hi, inp["bem.grid"], n_w)[3], "bem.grid and bem.pixels_per_wavelength"
+    for stage in ("contact", "separation"):
+        values = inp.upstream[stage].coords.get("zeta") if stage in inp.upstream else None
+        if values is not None:
+            _zeta_index(values, zeta, stage, limit)
 
 
 def _band(inp: StageInput, q: np.ndarray, names: tuple[str, ...]) -> dict:
@@ -209,11 +240,7 @@ def _describe(inp: StageInput, ds: xr.Dataset, band: dict) -> None:
 def compute_bem(inp: StageInput) -> xr.Dataset:
     psd = inp.upstream["psd"]
     q = psd["q"].values
-    for name in ("psd_substrate", "psd_solid"):
-        extra = [d for d in psd[name].dims if d != "q"]
-        if extra:
-            raise UserError(f"the bem stage does not sweep {', '.join(extra)}: give a single value",
-                            key=f"{name.removeprefix('psd_')}.hrms")
+    _single_surfaces(psd.sizes)
     C1, C2 = psd["psd_substrate"].values, psd["psd_solid"].values
     E_star = e_star(inp)
     names = map_surfaces(inp)
@@ -283,6 +310,7 @@ register(
         name="bem",
         version="2",
         compute=compute_bem,
+        check=check_bem,
         validate=validate_bem,
         requires=("psd", "contact", "separation"),
         params=(*MATERIAL_KEYS, "load.p", "interface.eta", "substrate", "solid", "bem.surfaces",

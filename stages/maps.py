@@ -72,7 +72,7 @@ def prepare_map(name: str, spec: dict, topo, index: int) -> dict:
     analysis = "profiles" if h.ndim == 1 else spec["analysis"]
     return dict(h=h, sizes=tuple(float(s) for s in sizes), periodic=bool(periodic), detrend=detrend_how,
                 window=window, analysis=analysis, unit=f"{topo.unit} ({topo.unit_source})", size_source=size_note,
-                path=path, format=topo.format, index=index)
+                path=path, format=topo.format, index=index, name=name)
 
 
 def _cutoffs(p, spec):
@@ -100,6 +100,10 @@ def process_map(p: dict, spec: dict) -> dict:
     profiles = p["analysis"] == "profiles"
     h = detrend(h, DETREND_DEGREE[p["detrend"]], profiles=profiles)
     rms = float(np.sqrt(np.mean(h * h)))
+    if not rms > 1e-12 * float(np.max(np.abs(p["h"]))):  # nothing left but rounding (or all equal)
+        raise UserError(f"a flat {'profile' if profiles else 'map'}: no roughness is left after removing the "
+                        f"{p['detrend']} (rms {rms:.3g} m), so there is no spectrum to measure",
+                        file=p["path"], key=f"{p['name']}.files")
     if p["window"] == "hann":
         if profiles:
             h *= hann_window_1d(h.shape[0]).reshape((-1,) + (1,) * (h.ndim - 1))

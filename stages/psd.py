@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from roughcontact.physics.quadrature import log_grid
+from roughcontact.physics.quadrature import log_grid, log_grid_size
 from roughcontact.physics.spectra import (
     CONVENTIONS,
     extend_psd,
@@ -21,10 +21,20 @@ from roughcontact.physics.spectra import (
     self_affine_hrms_factor,
     self_affine_psd,
 )
-from roughcontact.stage import FileInput, Stage, StageInput, UserError, Var, register
+from roughcontact.stage import FileInput, Preview, Stage, StageInput, UserError, Var, register
 
 from .maps import measured_coherence_on_grid, measured_psd_on_grid
 from .shared import SURFACES, is_rough, needs_topography, surface_reads
+
+
+def _check_extent(name: str, spec: dict, spectrum, lo: float, hi: float) -> None:
+    """With extend = 'none' the q grid [lo, hi] must lie inside the file's range."""
+    q_si = spectrum.q
+    if spec["extend"] == "none" and (lo < q_si[0] * (1 - 1e-9) or hi > q_si[-1] * (1 + 1e-9)):
+        raise UserError(
+            f"the q grid [{lo:.4g}, {hi:.4g}] 1/m reaches outside the file's range [{q_si[0]:.4g}, {q_si[-1]:.4g}] 1/m; "
+            f"set grid.q_min/q_max inside it or {name}.extend = 'power_law' or 'zero'",
+            file=str(spectrum.path), key=f"{name}.extend")
 
 
 def _measured(name: str, spec: dict, spectrum, q_grid: np.ndarray) -> tuple[np.ndarray, dict]:
@@ -33,12 +43,7 @@ def _measured(name: str, spec: dict, spectrum, q_grid: np.ndarray) -> tuple[np.n
     q_si, convention = spectrum.q, spectrum.convention
     C = psd_to_persson(q_si, spectrum.values, convention, spec.get("hurst", 0.5))
     how = spec["extend"]
-    lo, hi = q_grid[0], q_grid[-1]
-    if how == "none" and (lo < q_si[0] * (1 - 1e-9) or hi > q_si[-1] * (1 + 1e-9)):
-        raise UserError(
-            f"the q grid [{lo:.4g}, {hi:.4g}] 1/m reaches outside the file's range [{q_si[0]:.4g}, {q_si[-1]:.4g}] 1/m; "
-            f"set grid.q_min/q_max inside it or {name}.extend = 'power_law' or 'zero'",
-            file=str(spectrum.path), key=f"{name}.extend")
+    _check_extent(name, spec, spectrum, q_grid[0], q_grid[-1])
     attrs = dict(
         spectrum.attrs,
         source_file=str(spectrum.path),
@@ -51,7 +56,9 @@ def _measured(name: str, spec: dict, spectrum, q_grid: np.ndarray) -> tuple[np.n
     return extend_psd(q_grid, q_si, C, how if how != "none" else "zero"), attrs
 
 
-def _q_range(inp: StageInput) -> tuple[float, float, list[float]]:
+def _q_range(inp: StageInput, topography: Preview | None) -> tuple[float, float, list[float]]:
+    """The q grid's ends and knots, from the surfaces (``topography``: the preview of the
+    topography stage's result, for measured maps)."""
     lows, highs, knots = [], [], []
     for name in SURFACES:
         spec = inp[name]
@@ -61,11 +68,12 @@ def _q_range(inp: StageInput) -> tuple[float, float, list[float]]:
             lows.append(spec["qL"])
             highs.append(spec["q1"])
             knots += [spec["qL"], spec["q0"], spec["q1"]]
-        elif spec["kind"] == "topography":  # measured range, from the topography stage
-            ds = inp.upstream["topography"]
-            q = ds[f"q_{name}_measured"].values[np.isfinite(ds[f"psd_{name}_measured"].values)]
-            lows.append(float(np.nanmin(q)))
-            highs.append(float(np.nanmax(q)))
+        elif spec["kind"] == "topography":  # measured range (bins holding modes), from the topography stage
+            found = topography.ranges.get(f"q_{name}_measured") if topography is not None else None
+            if found is None:
+                raise UserError("the measured maps give no wavenumber bins", key=f"{name}.files")
+            lows.append(found[0])
+            highs.append(found[1])
         else:
             q = inp.files[f"{name}.path"].q
             lows.append(float(q[0]))
@@ -79,8 +87,33 @@ def _q_range(inp: StageInput) -> tuple[float, float, list[float]]:
     return lo, hi, knots
 
 
+def validate_psd(inp: StageInput) -> Preview:
+    """Before anything computes: the q grid (its range, that the files cover it), the coherence
+    asked for; returns the q grid's size and range for the downstream checks."""
+    topography = inp.upstream.get("topography")
+    lo, hi, knots = _q_range(inp, topography)
+    for name in SURFACES:
+        spec = inp[name]
+        if is_rough(spec) and spec["kind"] == "psd_file":
+            _check_extent(name, spec, inp.files[f"{name}.path"], lo, hi)
+        elif is_rough(spec) and spec["kind"] == "topography" and spec["extend"] == "none" and topography is not None:
+            found = topography.ranges[f"q_{name}_measured"]
+            if lo < found[0] * (1 - 1e-9) or hi > found[1] * (1 + 1e-9):
+                raise UserError(f"the q grid [{lo:.4g}, {hi:.4g}] 1/m reaches outside the measured range "
+                                f"[{found[0]:.4g}, {found[1]:.4g}] 1/m; set grid.q_min/q_max inside it or "
+                                f"{name}.extend = 'power_law' or 'zero'", key=f"{name}.extend")
+    if isinstance(inp["interface.eta"], str) and (topography is None or "coherence" not in topography.variables):
+        why = topography.attrs.get("pairing", "") if topography is not None else ""
+        raise UserError("eta = 'measured' needs both surfaces of kind 'topography', paired on the same grid"
+                        + (f" ({why})" if why else ""), key="interface.eta")
+    size = log_grid_size(lo, hi, inp["numerics.points_per_decade"], knots)
+    grid = {"q": log_grid(lo, hi, inp["numerics.points_per_decade"], knots)} if size <= 10**6 else {}
+    return Preview(sizes={"q": size}, ranges={"q": (lo, hi)}, keys={"q": "numerics.points_per_decade"}, coords=grid)
+
+
 def compute_psd(inp: StageInput) -> xr.Dataset:
-    lo, hi, knots = _q_range(inp)
+    topography = Preview.of(inp.upstream["topography"]) if "topography" in inp.upstream else None
+    lo, hi, knots = _q_range(inp, topography)
     q_values = log_grid(lo, hi, inp["numerics.points_per_decade"], knots)
     q = xr.DataArray(q_values, dims=("q",))
     surfaces: dict[str, xr.DataArray] = {}
@@ -109,11 +142,7 @@ def compute_psd(inp: StageInput) -> xr.Dataset:
         da.attrs = attrs
         surfaces[name] = da
     both = is_rough(inp["substrate"]) and is_rough(inp["solid"])
-    if isinstance(inp["interface.eta"], str):  # "measured": eta(q) from paired topographies
-        if "topography" not in inp.upstream or "coherence" not in inp.upstream["topography"]:
-            why = inp.upstream["topography"].attrs.get("pairing", "") if "topography" in inp.upstream else ""
-            raise UserError("eta = 'measured' needs both surfaces of kind 'topography', paired on the same grid"
-                            + (f" ({why})" if why else ""), key="interface.eta")
+    if isinstance(inp["interface.eta"], str):  # "measured": eta(q) from paired topographies (validate_psd checked them)
         eta_q = xr.DataArray(measured_coherence_on_grid(inp.upstream["topography"], q_values), dims=("q",))
         combined = xr.apply_ufunc(psd_combined, surfaces["substrate"], surfaces["solid"], eta_q.assign_coords(q=q),
                                   dask="parallelized", output_dtypes=[float])
@@ -146,7 +175,7 @@ def _files(name: str) -> FileInput:
     def options(params):
         spec = params[name]
         return dict(key=name, convention=spec["convention"], columns=spec["columns"], q_unit=spec["q_unit"],
-                    value_unit=spec["C_unit"], variable=spec["variable"],
+                    value_unit=spec["C_unit"], variable=spec["variable"], select=spec["select"],
                     convention_units={k: unit for k, (unit, _) in CONVENTIONS.items()})
 
     return FileInput(f"{name}.path", reader="spectrum", options=options)
@@ -163,6 +192,8 @@ register(
         files=(_files("substrate"), _files("solid")),
         requires=("topography",),
         needed=lambda values: ("topography",) if needs_topography(values) else (),
+        validate=validate_psd,
+        point_bytes=lambda params, wanted, upstream: 8 * 8 * (upstream["psd"].sizes["q"] if "psd" in upstream else 64),
         outputs={
             "psd_substrate": Var("m^4", "power spectral density of the substrate (C1, Persson convention)"),
             "psd_solid": Var("m^4", "power spectral density of the solid (C2, Persson convention)"),

@@ -24,6 +24,7 @@ from roughcontact.physics.separation import (
 from roughcontact.stage import (
     Figure,
     Param,
+    Preview,
     Section,
     Stage,
     StageInput,
@@ -35,7 +36,7 @@ from roughcontact.stage import (
 )
 
 from .figures.separation import figure_separation
-from .shared import E_STAR, MATERIAL_KEYS, e_star, zeta_values
+from .shared import E_STAR, MATERIAL_KEYS, e_star, zeta_preview, zeta_values
 
 register_section(
     Section(
@@ -73,6 +74,11 @@ def _checked_alpha(inp: StageInput) -> float:
     if np.any(~(np.atleast_1d(np.asarray(inp["load.p"], dtype=float)) > 0)):
         raise UserError("pressures must be > 0", key="load.p")
     return alpha
+
+
+def validate_separation(inp: StageInput) -> Preview:
+    """Before anything computes: the magnifications lie on the psd stage's q grid."""
+    return zeta_preview(inp, inp.upstream["psd"])
 
 
 def compute_separation(inp: StageInput) -> xr.Dataset:
@@ -148,6 +154,8 @@ register(
         name="separation",
         version="1",
         compute=compute_separation,
+        validate=validate_separation,
+        unchunked=("zeta",),
         requires=("psd",),
         params=(*MATERIAL_KEYS, "load.p", "contact.zeta", "separation.alpha", "separation.refinement", *_NUMERICS),
         outputs={

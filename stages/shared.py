@@ -14,7 +14,7 @@ import numpy as np
 
 from roughcontact.physics.contact import effective_modulus
 from roughcontact.physics.spectra import CONVENTIONS
-from roughcontact.stage import Param, Section, UserError, Var, register_coords, register_params, register_section
+from roughcontact.stage import Param, Preview, Section, UserError, Var, register_coords, register_params, register_section
 
 # ----------------------------------------------------------------------------------------
 # Coordinates written by several stages
@@ -53,10 +53,27 @@ def zeta_values(inp, q: np.ndarray) -> np.ndarray:
     if isinstance(zeta, str):
         return q / q[0]
     zeta = np.atleast_1d(np.asarray(zeta, dtype=float))
-    top = q[-1] / q[0]
+    _check_zeta(zeta, q[-1] / q[0])
+    return zeta
+
+
+def _check_zeta(zeta: np.ndarray, top: float) -> None:
     if np.any(zeta > top * (1 + 1e-12)):
         raise UserError(f"magnification {zeta.max():g} beyond the q grid (zeta <= q_max/qL = {top:.6g})", key="contact.zeta")
-    return zeta
+
+
+def zeta_preview(inp, psd) -> Preview:
+    """Before anything computes: the magnifications ``[contact] zeta`` asks for (their number, and
+    their values where known), checked against the q grid of the psd stage's ``psd`` preview."""
+    zeta = inp["contact.zeta"]
+    if isinstance(zeta, str):
+        q = psd.coords.get("q")
+        return Preview(sizes={"zeta": int(psd.sizes["q"])}, coords={"zeta": q / q[0]} if q is not None else {},
+                       keys={"zeta": "numerics.points_per_decade"})
+    zeta = np.atleast_1d(np.asarray(zeta, dtype=float))
+    lo, hi = psd.ranges["q"]
+    _check_zeta(zeta, hi / lo)
+    return Preview(sizes={"zeta": int(zeta.size)}, coords={"zeta": zeta}, keys={"zeta": "contact.zeta"})
 
 
 # ----------------------------------------------------------------------------------------
@@ -111,6 +128,8 @@ PSD_FILE_PARAMS = (
     Param("hurst", "quantity", "", default=0.5, lo=0.0, hi=1.0, lo_open=True,
           doc="Hurst exponent assumed by the '1d' (profile) conversion"),
     Param("variable", "str", default=None, doc="NetCDF: name of the PSD variable (default: the only one over q)"),
+    Param("select", "table", default=None,
+          doc="NetCDF: the slice of a PSD variable with more dimensions than q, e.g. { eta = 0.0 } for psd_combined"),
     Param("extend", "choice", default="none", choices=("none", "power_law", "zero"),
           doc="how to extend beyond the file's q range (none: error)"),
 )

@@ -21,7 +21,8 @@ from roughcontact.physics.estimators import (
     pooled_coherence,
     second_surface_hurst,
 )
-from roughcontact.stage import Figure, Param, Stage, StageInput, UserError, Var, register, register_params
+from roughcontact.physics.lattice import binned_wavenumbers
+from roughcontact.stage import Figure, Param, Preview, Stage, StageInput, UserError, Var, register, register_params
 
 from .figures.topography import figure_coherence, figure_measured_psd
 from .maps import prepare_map, process_map, topography_files
@@ -92,8 +93,9 @@ def _surface_vars(name, spectra, described, bpd):
             f"q_{name}_measured": (q, {}), f"modes_{name}": (n, {})}, n > 0
 
 
-def compute_topography(inp: StageInput) -> xr.Dataset:
-    bpd = inp["numerics.topography_bins_per_decade"]
+def _prepared(inp: StageInput):
+    """The checked and prepared files of each measured surface, the bin edges and the pairing
+    (why the files cannot be paired, or None)."""
     specs = {name: inp[name] for name in SURFACES if is_topography(inp[name])}
     if not specs:
         raise UserError("no surface has kind = 'topography'", key="substrate.kind")
@@ -101,9 +103,38 @@ def compute_topography(inp: StageInput) -> xr.Dataset:
                 for name, spec in specs.items()}
     q_lo = min(p["q_min"] for ps in prepared.values() for p in ps)
     q_hi = max(p["q_max"] for ps in prepared.values() for p in ps)
-    edges = log_bin_edges(q_lo, q_hi, bpd)
-    centres = np.sqrt(edges[1:] * edges[:-1])
+    edges = log_bin_edges(q_lo, q_hi, inp["numerics.topography_bins_per_decade"])
     pair_note = _pairing_problem(prepared["substrate"], prepared["solid"]) if len(specs) == 2 else None
+    return specs, prepared, edges, pair_note
+
+
+def validate_topography(inp: StageInput) -> Preview:
+    """Before anything computes: every file read, checked and prepared (units, sizes, missing
+    points, flat maps, reliable band); returns the measured wavenumber range of each surface
+    (from the Fourier lattice alone, no FFT) and whether the pair gives a coherence."""
+    specs, prepared, edges, pair_note = _prepared(inp)
+    paired = len(specs) == 2 and pair_note is None
+    ranges, bins = {}, np.zeros(edges.size - 1, bool)
+    for name in specs:
+        other = prepared["solid" if name == "substrate" else "substrate"] if paired else [None] * len(prepared[name])
+        lattice = [binned_wavenumbers(p["h"].shape, p["sizes"], edges, min(p["q_max"], r["q_max"]) if r else p["q_max"],
+                                      profiles=p["analysis"] == "profiles") for p, r in zip(prepared[name], other)]
+        q, _, n, _ = merge_spectra([{"n": n, "q": q, "C11": np.zeros_like(q)} for n, q in lattice])
+        bins |= n > 0
+        if np.count_nonzero(n > 0) < 2:
+            raise UserError("the measured maps give fewer than two wavenumber bins", key=f"{name}.files")
+        ranges[f"q_{name}_measured"] = (float(np.nanmin(q)), float(np.nanmax(q)))
+    variables = {f"{kind}_{name}_measured" for name in specs for kind in ("psd", "q")}
+    variables |= {"coherence", "cross_psd_measured", "coherence_error"} if paired else set()
+    pairing = "paired" if paired else f"not paired: {pair_note}" if pair_note else "not paired: one surface only"
+    return Preview(sizes={"q_bin": int(np.ptp(np.flatnonzero(bins))) + 1}, ranges=ranges,
+                   variables=frozenset(variables), attrs={"pairing": pairing})
+
+
+def compute_topography(inp: StageInput) -> xr.Dataset:
+    bpd = inp["numerics.topography_bins_per_decade"]
+    specs, prepared, edges, pair_note = _prepared(inp)
+    centres = np.sqrt(edges[1:] * edges[:-1])
     paired = len(specs) == 2 and pair_note is None
     if paired:
         spectra = _paired_spectra(prepared, specs, edges)
@@ -135,6 +166,7 @@ register(
         params=("substrate", "solid", "numerics.topography_bins_per_decade"),
         # of a measured surface the map keys and the line-scan H; of any other surface only its kind
         reads=surface_reads({"topography": (*MAP_KEYS, "hurst"), "*": ()}),
+        validate=validate_topography,
         files=(topography_files("substrate"), topography_files("solid")),
         outputs={
             **{f"psd_{s}_measured": Var("m^4", f"measured PSD of the {s} (Persson convention)") for s in SURFACES},
