@@ -147,6 +147,7 @@ def validate(plans, scenes: dict, outdir: Path) -> tuple[dict[int, dict], dict[t
     spanned: dict[tuple[str, str], dict[str, int]] = {}
     stored: dict[tuple[str, str], int] = {}  # bytes of each result, estimated or on disk
     estimates = []
+    planned: dict[Path, tuple[str, str]] = {}  # result path -> its (variant, stage)
     in_flight = max(2, 2 * (os.cpu_count() or 2))
     for i, p in enumerate(plans):
         here = (p.variant, p.stage.name)
@@ -160,8 +161,11 @@ def validate(plans, scenes: dict, outdir: Path) -> tuple[dict[int, dict], dict[t
                          for d in spanned.get((p.variant, up), {}))
         if _stored(p):
             where = p.path if p.status == "fresh" else p.source
-            previews[here] = stored_preview(where)
-            stored[here] = where.stat().st_size
+            if where in planned:  # identical to a result computed earlier in this run: its preview
+                previews[here], stored[here] = previews[planned[where]], stored[planned[where]]
+            else:
+                previews[here], stored[here] = stored_preview(where), where.stat().st_size
+            planned[p.path] = here
             continue
         with _in_variant(p.variant):
             own = p.stage.validate(StageInput(params=p.params, upstream=upstream, files=files[i], wanted=p.wanted,
@@ -170,5 +174,6 @@ def validate(plans, scenes: dict, outdir: Path) -> tuple[dict[int, dict], dict[t
         stored[here] = estimates[-1].result
         own = own if own is not None else Preview()
         previews[here] = dataclasses.replace(own, sizes={**dims, **own.sizes})  # with the sweep dims it spans
+        planned[p.path] = here
     sizing.check(estimates, outdir)
     return files, previews

@@ -65,6 +65,9 @@ def main() -> None:
                 shutil.rmtree(folder)
     base = best["python -c 'import numpy, xarray'"]
     print(f"scene {args.scene}, best of {args.repeat} runs each (interleaved)")
+    if os.environ.get("PYTHONDONTWRITEBYTECODE"):
+        print("note: PYTHONDONTWRITEBYTECODE is set: roughcontact's modules are compiled at every start "
+              "(an install compiles them once)")
     targets = {"roughcontact run (all fresh)": 1.5, "roughcontact plan (all fresh)": 1.5, "roughcontact run (cold)": 3.0}
     for name, seconds in best.items():
         target = f"  (target <= {targets[name]:g}x)" if name in targets else ""

@@ -11,6 +11,7 @@ import errno
 import io
 import json
 import os
+import re
 import socket
 import subprocess
 import sys
@@ -36,6 +37,8 @@ TESTS = Path(__file__).resolve().parent
 def _cli(capsys, *args):
     code = main(list(map(str, args)))
     err = capsys.readouterr().err.strip()
+    # --quiet still says one line per stage ("[1/2] psd: ..."); the error itself is one line
+    err = "\n".join(line for line in err.splitlines() if not re.match(r"\[\d+/\d+\] ", line))
     assert "Traceback" not in err and len(err.splitlines()) <= 1, err
     return code, err
 
