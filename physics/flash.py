@@ -135,10 +135,11 @@ class _State(NamedTuple):
 class _March:
     """One node of the march for a trial temperature, and the implicit step between two nodes."""
 
-    def __init__(self, v, grid, storage, loss, n_phi, k, nu, conductivity, diffusivity, shift, correction, gamma, tol):
+    def __init__(self, v, grid, storage, loss, n_phi, k, nu, conductivity, diffusivity, shift, correction, gamma, tol,
+                 area=("persson", None)):
         self.v, self.grid, self.storage, self.loss, self.n_phi = v, grid, storage, loss, n_phi
         self.k, self.nu, self.lam, self.D, self.shift = k, nu, conductivity, diffusivity, shift
-        self.correction, self.gamma, self.tol = correction, gamma, tol
+        self.correction, self.gamma, self.tol, self.area = correction, gamma, tol, tuple(area)
 
     def evaluate(self, q, C, T, prev: _State | None) -> _State:
         """The node at wavenumber q for the temperature T: E(w, T) = beta E_stored(w rho)."""
@@ -148,7 +149,7 @@ class _March:
         A, B = beta * beta * A[..., 0], beta * B[..., 0]
         g = 0.5 * self.k ** 2 * q ** 3 * C * A
         G = np.zeros(np.shape(g)) if prev is None else prev.G + segment_integrals_pairs(prev.q, q, prev.g, g)
-        S = area_factor(contact_fraction(G), self.correction, self.gamma)
+        S = area_factor(contact_fraction(G, *self.area), self.correction, self.gamma)
         h = heating_rate(qa, self.v, C[..., None], S[..., None], B[..., None], self.nu, self.lam, self.D)[..., 0]
         return _State(q, C, np.broadcast_to(T, np.shape(h)), A, B, g, G, h)
 
@@ -191,7 +192,7 @@ class _March:
 
 
 def flash_march(q, C, v, T_start, omega_grid, storage, loss, n_phi, sigma0, nu, conductivity, diffusivity, shift,
-                correction="none", gamma=0.5, tolerance=1e-6, max_shift=0.05):
+                correction="none", gamma=0.5, tolerance=1e-6, max_shift=0.05, area=("persson", None)):
     """T_q, A, B and G along the q grid with the flash temperature, by marching in q.
 
     The initial-value problem dT/dq = F(q, T, G) (:func:`heating_rate`), dG/dq = (k^2/2) q^3 C A(q, T),
@@ -234,6 +235,9 @@ def flash_march(q, C, v, T_start, omega_grid, storage, loss, n_phi, sigma0, nu, 
         Temperature tolerance of each implicit step (K).
     max_shift : float
         Largest change of log10 a_T within one step (decades).
+    area : (str, float or None)
+        The contact-area correction of P(q) and its gamma
+        (:func:`roughcontact.physics.friction.contact_fraction`).
 
     Returns
     -------
@@ -251,7 +255,7 @@ def flash_march(q, C, v, T_start, omega_grid, storage, loss, n_phi, sigma0, nu, 
     C = np.asarray(C, dtype=float)
     k = 1.0 / ((1.0 - nu * nu) * np.asarray(sigma0, dtype=float))
     march = _March(np.asarray(v, dtype=float), omega_grid, storage, loss, n_phi, k, nu, conductivity, diffusivity,
-                   shift, correction, gamma, tolerance)
+                   shift, correction, gamma, tolerance, area)
     states = [march.evaluate(q[0], C[..., 0], np.asarray(T_start, dtype=float), None)]
     index = [0]
     for i in range(1, q.size):
@@ -265,7 +269,7 @@ def flash_march(q, C, v, T_start, omega_grid, storage, loss, n_phi, sigma0, nu, 
 
 def flash_friction_kernel(q, C, v, T_start, omega_grid, storage, loss, n_phi, sigma0, nu, conductivity, diffusivity,
                           shift, correction="none", gamma=0.5, segment_nodes=12, tolerance=1e-6, max_shift=0.05,
-                          profile=False):
+                          profile=False, area=("persson", None)):
     """mu(v), A/A0(v) and the flash temperature with the modulus at E(q v cos phi, T_q).
 
     :func:`flash_march` gives T_q and the angular integrals at T_q on the q grid; mu and A/A0
@@ -289,8 +293,10 @@ def flash_friction_kernel(q, C, v, T_start, omega_grid, storage, loss, n_phi, si
     docs/theory.md, section "Flash temperature"; Persson, J. Phys.: Condens. Matter 18, 7789 (2006).
     """
     qs, Cs, T, A, B, _, index = flash_march(q, C, v, T_start, omega_grid, storage, loss, n_phi, sigma0, nu,
-                                            conductivity, diffusivity, shift, correction, gamma, tolerance, max_shift)
-    out = friction_kernel(qs, Cs, A, B, np.asarray(sigma0, dtype=float), nu, correction, gamma, profile, segment_nodes)
+                                            conductivity, diffusivity, shift, correction, gamma, tolerance, max_shift,
+                                            area)
+    out = friction_kernel(qs, Cs, A, B, np.asarray(sigma0, dtype=float), nu, correction, gamma, profile, segment_nodes,
+                          *area)
     mu, area = out[0], out[1]
     if profile:
         heat = np.asarray(sigma0, dtype=float)[..., None] * np.asarray(v, dtype=float)[..., None] * out[3]

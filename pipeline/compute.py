@@ -40,6 +40,17 @@ def auto_chunks(sizes: Mapping[str, int], budget_points: int, explicit: Mapping[
     return {d: c for d, c in chunks.items() if c < sizes[d]}
 
 
+def chunk_sweeps(upstream: Mapping[str, xr.Dataset], chunks: Mapping[str, int]) -> dict[str, xr.Dataset]:
+    """Upstream results chunked along the sweep dimensions a stage chunks (``chunks``, from
+    :func:`auto_chunks`): a sweep dimension made upstream (eta, spectrum draws) then splits the
+    stage's work into blocks like the stage's own sweeps. Chunking never changes values."""
+    out = {}
+    for name, ds in upstream.items():
+        dims = {d: int(c) for d, c in chunks.items() if d in ds.dims and c}
+        out[name] = ds.chunk(dims) if dims else ds
+    return out
+
+
 @contextlib.contextmanager
 def scheduler(setting: str) -> Iterator[object]:
     """Yield what :func:`write_blocks` computes with: a dask scheduler name or a distributed Client."""

@@ -270,6 +270,8 @@ def run(scene: Scene, outdir: Path, targets: Iterable[str] | None = None, force:
 
 
 def _run(scene, outdir, targets, force, report, compute_with, verify=None):
+    from .compute import chunk_sweeps
+
     plans = plan(scene, outdir, targets, force, verify)
     scenes = {"base": scene, **scene.variants}
     store.clean_temporaries(outdir)
@@ -294,13 +296,13 @@ def _run(scene, outdir, targets, force, report, compute_with, verify=None):
         report.live(f"{tag}: computing ({why})")
         t0 = time.perf_counter()
         upstream = {up: results[p.variant][up] for up in p.record["upstream"]}
+        chunks = stage_chunks(scenes[p.variant], p.stage, p.params, p.wanted, {**upstream, **_own(previews, p)})
         inp = StageInput(
             params=p.params,
-            upstream=upstream,
+            upstream=chunk_sweeps(upstream, chunks),  # a sweep made upstream (eta, draw) splits this stage's work too
             files=files[i - 1],
             wanted=p.wanted,
-            chunks=stage_chunks(scenes[p.variant], p.stage, p.params, p.wanted,
-                                {**upstream, **_own(previews, p)}),
+            chunks=chunks,
             stage=p.stage.name,
             reporter=report,
         )

@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from .containers import read_container
 from .errors import UserError
 from .ncio import locked
 
@@ -446,4 +447,4 @@ def read_master_curve(path: Path, *, key: str = "modulus", columns=(0, 1, 2), fr
 
 
 READERS = {"table": read_table, "netcdf": read_netcdf, "auto": read_auto, "topography": read_topography, "spectrum": read_spectrum,
-           "master_curve": read_master_curve, "dma": lambda path, **kw: __import__(f"{__package__}.dma", fromlist=["read_dma"]).read_dma(path, **kw)}
+           "master_curve": read_master_curve, "dma": lambda path, **kw: __import__(f"{__package__}.dma", fromlist=["read_dma"]).read_dma(path, **kw), "container": read_container}

@@ -274,7 +274,7 @@ def _vanishing(ds, psd, c0, c1, q, E_star, dg, nodes, K_min, tol, sigma0, progre
 # The stage
 # ----------------------------------------------------------------------------------------
 
-register(
+STAGE = register(
     Stage(
         name="adhesion",
         version="1",

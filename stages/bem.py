@@ -24,9 +24,10 @@ from roughcontact.stage import (
     Figure, Param, Section, Stage, StageInput, UserError, Var, register, register_params, register_section,
 )
 
-from .figures.bem import figure_bem_comparison
+from .figures.bem import figure_bem_comparison, figure_bem_reduced_pressure
 from .maps import check_eta, map_band, map_surfaces, measured_maps, topography_files
 from .shared import E_STAR, MAP_KEYS, MATERIAL_KEYS, e_star, surface_reads
+from .variants import VARIANT_KEYS, VARIANTS, theory_variants, variant_attrs
 
 #: the optional dependency and how to install it (named in the error without it)
 EXTRA = 'pip install "roughcontact[bem]"'
@@ -104,10 +105,12 @@ def _at_zeta(ds: xr.Dataset, var: str, zeta: float, stage: str, set_by: str) -> 
 
 
 def _single_surfaces(sizes) -> None:
-    """The BEM solves one pair of surfaces: no hrms sweep."""
+    """The BEM solves one pair of surfaces: no hrms sweep, no spectrum draws."""
     for name in ("substrate", "solid"):
         if sizes.get(f"hrms_{name}", 1) > 1:
             raise UserError(f"the bem stage does not sweep hrms_{name}: give a single value", key=f"{name}.hrms")
+    if sizes.get("draw", 1) > 1:
+        raise UserError("the bem stage does not take spectrum draws: set bands.draws = 0", key="bands.draws")
 
 
 def check_bem(inp: StageInput) -> None:
@@ -284,6 +287,7 @@ def compute_bem(inp: StageInput) -> xr.Dataset:
     with np.errstate(divide="ignore", invalid="ignore"):
         ds["area_ratio_theory_to_bem"] = (("p", "eta"), t_area / ds["bem_contact_area_ratio_mean"].values)
         ds["separation_ratio_theory_to_bem"] = (("p", "eta"), t_gap / ds["bem_mean_gap_mean"].values)
+    ds = _with_variants(inp, ds, psd, q, zeta_bem, p_values, has_eta, E_star)
     for k, v in attrs.items():
         ds[k] = xr.DataArray(v)
     ds["E_star"] = xr.DataArray(E_star)
@@ -292,6 +296,23 @@ def compute_bem(inp: StageInput) -> xr.Dataset:
         ds = ds.isel(eta=0, drop=True)
     if np.ndim(inp["load.p"]) == 0:
         ds = ds.isel(p=0)
+    return ds
+
+
+def _with_variants(inp, ds, psd, q, zeta_bem, p_values, has_eta, E_star) -> xr.Dataset:
+    """Every theory variant (eq 19 / eq 57 and each correction) at the BEM's magnification, and
+    its ratio to the BEM, over (p, eta, theory)."""
+    C = psd["psd_combined"]
+    rows = C.transpose("eta", "q").values if has_eta else np.atleast_2d(C.values)
+    area, gap = theory_variants(inp, q, rows, zeta_bem * q[0], p_values, E_star)
+    dims = ("p", "eta", "theory")
+    ds = ds.assign_coords(theory=list(VARIANTS))
+    ds["theory_variant_contact_area_ratio"] = (dims, area)
+    ds["theory_variant_mean_separation"] = (dims, gap)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ds["area_ratio_variant_to_bem"] = (dims, area / ds["bem_contact_area_ratio_mean"].values[..., None])
+        ds["separation_ratio_variant_to_bem"] = (dims, gap / ds["bem_mean_gap_mean"].values[..., None])
+    ds.attrs.update(variant_attrs(inp))
     return ds
 
 
@@ -308,14 +329,14 @@ _THEORY = "(at the BEM's magnification bem_zeta)"
 register(
     Stage(
         name="bem",
-        version="2",
+        version="3",
         compute=compute_bem,
         check=check_bem,
         validate=validate_bem,
         requires=("psd", "contact", "separation"),
         params=(*MATERIAL_KEYS, "load.p", "interface.eta", "substrate", "solid", "bem.surfaces",
                 "bem.grid", "bem.realizations", "bem.seed", "bem.pixels_per_wavelength", "numerics.bem_tolerance",
-                "numerics.bem_stress_bins", "numerics.sigma_width"),
+                "numerics.bem_stress_bins", "numerics.sigma_width", *VARIANT_KEYS),
         # measured maps (kind = "topography"): the engine reads them; used when bem.surfaces allows.
         # Synthesized surfaces come from the psd stage's spectra: of those sections, only the kind
         reads=surface_reads({"topography": MAP_KEYS, "*": ()}),
@@ -337,8 +358,13 @@ register(
             "bem_mean_gap_mean": Var("m", "BEM mean interfacial separation, mean over realizations"),
             "bem_mean_gap_std": Var("m", "BEM mean interfacial separation, standard deviation over realizations "
                                          "(0: a single realization)"),
-            "theory_contact_area_ratio": Var("1", f"A/A0 of the contact stage (eq 19) {_THEORY}"),
-            "theory_mean_separation": Var("m", f"mean separation of the separation stage (eq 57) {_THEORY}"),
+            "theory_contact_area_ratio": Var("1", f"A/A0 of the contact stage (eq 19, or contact.correction) {_THEORY}"),
+            "theory_mean_separation": Var("m", f"mean separation of the separation stage (eq 57, with "
+                                               f"separation.refinement) {_THEORY}"),
+            "theory_variant_contact_area_ratio": Var("1", f"A/A0 of each theory variant (coordinate theory) {_THEORY}"),
+            "theory_variant_mean_separation": Var("m", f"mean separation of each theory variant {_THEORY}"),
+            "area_ratio_variant_to_bem": Var("1", "theory / BEM ratio of the relative contact area, per variant"),
+            "separation_ratio_variant_to_bem": Var("1", "theory / BEM ratio of the mean separation, per variant"),
             "area_ratio_theory_to_bem": Var("1", "theory / BEM ratio of the relative contact area (same band)"),
             "separation_ratio_theory_to_bem": Var("1", "theory / BEM ratio of the mean separation (same band; NaN "
                                                        "where both are 0)"),
@@ -347,11 +373,15 @@ register(
         },
         coords={
             "realization": Var("1", "index of the surface pair (random pairs; a single 0: the measured maps)"),
+            "theory": Var("1", "theory variant: persson (eq 19, eq 57), yang_persson, wang_mueser "
+                               "(attribute theory_variants)"),
             "bem_stress_level": Var("1", "histogram bin centre, sigma / (p + sigma_width sqrt(G))"),
             "bem_sigma": Var("Pa", "local contact pressure at each histogram bin centre"),
         },
         figures=(Figure("bem_comparison", "theory vs BEM: A/A0, mean separation and their ratios",
-                        ("bem",), figure_bem_comparison),),
+                        ("bem",), figure_bem_comparison),
+                 Figure("bem_reduced_pressure", "theory / BEM ratios of every variant against p/(E* g)",
+                        ("bem",), figure_bem_reduced_pressure)),
         doc="Exact FFT-BEM contact (tamaas) on synthesized or measured surface pairs, compared with the theory at the same band.",
     )
 )

@@ -101,7 +101,7 @@ def temperature_law(mod: xr.Dataset):
 
 
 def _kernel(q, C, v, T_s, grid, Ep, Epp, p, nu, *, law, thermal, n_phi, correction, gamma, n_seg, max_shift,
-            background, distance, time_nodes, profile):
+            background, distance, time_nodes, profile, area=("persson", None)):
     """Stage-side kernel: mu, A/A0, T at q1 (and the background rise, the T_q profile and the heat
     released over q) for one block of the sweep, with the modulus at E(omega, T) = b_T/b_Ts
     E_stored(omega a_T/a_Ts)."""
@@ -114,7 +114,7 @@ def _kernel(q, C, v, T_s, grid, Ep, Epp, p, nu, *, law, thermal, n_phi, correcti
 
     def run(T_start, with_profile):
         return flash_friction_kernel(q, C, v, T_start, grid, Ep, Epp, n_phi, p, nu, lam, D, shift, correction, gamma,
-                                     n_seg, 1e-6, max_shift, with_profile)
+                                     n_seg, 1e-6, max_shift, with_profile, area)
 
     rise = np.zeros(np.broadcast_shapes(np.shape(v), np.shape(T_s), np.shape(p), np.shape(C)[:-1]))
     if background == "semi_infinite":
@@ -128,7 +128,7 @@ def _kernel(q, C, v, T_s, grid, Ep, Epp, p, nu, *, law, thermal, n_phi, correcti
     return (out[0], out[1], out[2], np.broadcast_to(rise, np.shape(out[0]))) + tuple(out[3:])
 
 
-def compute_flash(inp, q, C, v, p, mod, nu, thermal, n_phi, n_seg, correction, gamma):
+def compute_flash(inp, q, C, v, p, mod, nu, thermal, n_phi, n_seg, correction, gamma, area=("persson", None)):
     """The friction with the flash temperature over the sweep: a dict of DataArrays (mu, A/A0,
     the flash temperature, the background rise and, if asked, the profiles over q)."""
     profile = bool({"flash_temperature_profile", "frictional_heating"} & inp.wanted)
@@ -136,7 +136,7 @@ def compute_flash(inp, q, C, v, p, mod, nu, thermal, n_phi, n_seg, correction, g
     kwargs = dict(law=temperature_law(mod), thermal=thermal, n_phi=n_phi, correction=correction, gamma=gamma,
                   n_seg=n_seg, max_shift=float(inp["numerics.flash_shift_step"]), background=background,
                   distance=inp["friction.sliding_distance"], time_nodes=int(inp["numerics.flash_time_nodes"]),
-                  profile=profile)
+                  profile=profile, area=tuple(area))
     outputs = xr.apply_ufunc(
         _kernel, q, C, v, mod["T"], mod["omega"], mod["storage_modulus"], mod["loss_modulus"], p, nu, kwargs=kwargs,
         input_core_dims=[["q"], ["q"], [], [], ["omega"], ["omega"], ["omega"], [], []],

@@ -23,6 +23,7 @@ from roughcontact.stage import Figure, Param, Section, Stage, StageInput, UserEr
 from .figures.friction import figure_area_eta, figure_area_substrate, figure_mu_eta, figure_mu_substrate, figure_psds
 from .figures.flash import figure_flash
 from .flash import FLASH_KEYS, FLASH_NUMERICS, FLASH_OUTPUTS, FLASH_PARAMS, check_flash, compute_flash, flash_attrs
+from .shared import CORRECTION_KEYS, area_correction
 
 # ----------------------------------------------------------------------------------------
 # Scene section and numerics
@@ -99,15 +100,15 @@ def compute_friction(inp: StageInput) -> xr.Dataset:
     )
     extras = bool({"sliding_G", "friction_density"} & inp.wanted)
     outputs = xr.apply_ufunc(
-        friction_kernel, q, psd["psd_combined"], A, B, p, nu, correction, gamma, extras, n_seg,
-        input_core_dims=[["q"], ["q"], ["q"], ["q"], [], [], [], [], [], []],
+        friction_kernel, q, psd["psd_combined"], A, B, p, nu, correction, gamma, extras, n_seg, *area_correction(inp),
+        input_core_dims=[["q"], ["q"], ["q"], ["q"], [], [], [], [], [], [], [], []],
         output_core_dims=[[], []] + ([["q"], ["q"]] if extras else []),
         dask="parallelized", output_dtypes=[float] * (4 if extras else 2),
     )
     mu, area = outputs[0], outputs[1]
     thermal = check_flash(inp)
-    flash = compute_flash(inp, q, psd["psd_combined"], v, p, mod, nu, thermal, n_phi, n_seg, correction, gamma) \
-        if thermal is not None else {}
+    flash = compute_flash(inp, q, psd["psd_combined"], v, p, mod, nu, thermal, n_phi, n_seg, correction, gamma,
+                          area_correction(inp)) if thermal is not None else {}
     if flash:
         if "friction_coefficient_isothermal" in inp.wanted:
             flash["friction_coefficient_isothermal"] = mu
@@ -116,6 +117,9 @@ def compute_friction(inp: StageInput) -> xr.Dataset:
     mu.attrs = {"formula": "mu = 2/((1-nu^2) sigma0) int dq q^3 C P S int_0^(pi/2) cos(phi) E''(q v cos phi) dphi, "
                            f"{S_text}"}
     last = ("v",) if v.ndim else ()
+    name, area_gamma = area_correction(inp)
+    area.attrs = {"area_correction": name, **({"area_correction_gamma": area_gamma} if area_gamma else {})}
+    mu.attrs.update(area.attrs)
     ds = xr.Dataset({"friction_coefficient": mu.transpose(..., *last),
                      "sliding_contact_area_ratio": area.transpose(..., *last)})
     for name, index in (("sliding_G", 2), ("friction_density", 3)):
@@ -145,7 +149,7 @@ STAGE = register(
         requires=("modulus", "psd"),
         main_outputs=("friction_coefficient", "sliding_contact_area_ratio"),
         tolerance=1e-4,
-        params=("load.p", "material.nu", "friction.v", "friction.correction", "friction.gamma",
+        params=(*CORRECTION_KEYS, "load.p", "material.nu", "friction.v", "friction.correction", "friction.gamma",
                 "numerics.friction_phi_nodes", "numerics.friction_segment_nodes") + FLASH_KEYS,
         outputs={
             "friction_coefficient": Var("1", "hysteretic friction coefficient mu (eq 61)"),

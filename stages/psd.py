@@ -11,6 +11,7 @@ import numpy as np
 import xarray as xr
 
 from roughcontact.physics.quadrature import log_grid, log_grid_size
+from roughcontact.physics.uncertainty import combined_psd_error
 from roughcontact.physics.spectra import (
     CONVENTIONS,
     extend_psd,
@@ -24,7 +25,8 @@ from roughcontact.physics.spectra import (
 from roughcontact.stage import FileInput, Preview, Stage, StageInput, UserError, Var, register
 
 from .maps import measured_coherence_on_grid, measured_psd_on_grid
-from .shared import SURFACES, is_rough, needs_topography, surface_reads
+from .measured import coherence_error_grid, drawn_coherence, drawn_psd, psd_error_grid
+from .shared import SURFACES, is_measured, is_rough, needs_topography, surface_reads
 
 
 def _check_extent(name: str, spec: dict, spectrum, lo: float, hi: float) -> None:
@@ -68,10 +70,11 @@ def _q_range(inp: StageInput, topography: Preview | None) -> tuple[float, float,
             lows.append(spec["qL"])
             highs.append(spec["q1"])
             knots += [spec["qL"], spec["q0"], spec["q1"]]
-        elif spec["kind"] == "topography":  # measured range (bins holding modes), from the topography stage
+        elif is_measured(spec):  # measured range (bins holding modes), from the topography stage
             found = topography.ranges.get(f"q_{name}_measured") if topography is not None else None
             if found is None:
-                raise UserError("the measured maps give no wavenumber bins", key=f"{name}.files")
+                raise UserError("the measured maps give no wavenumber bins",
+                                key=f"{name}.{'container' if spec['kind'] == 'container' else 'files'}")
             lows.append(found[0])
             highs.append(found[1])
         else:
@@ -96,7 +99,7 @@ def validate_psd(inp: StageInput) -> Preview:
         spec = inp[name]
         if is_rough(spec) and spec["kind"] == "psd_file":
             _check_extent(name, spec, inp.files[f"{name}.path"], lo, hi)
-        elif is_rough(spec) and spec["kind"] == "topography" and spec["extend"] == "none" and topography is not None:
+        elif is_rough(spec) and is_measured(spec) and spec["extend"] == "none" and topography is not None:
             found = topography.ranges[f"q_{name}_measured"]
             if lo < found[0] * (1 - 1e-9) or hi > found[1] * (1 + 1e-9):
                 raise UserError(f"the q grid [{lo:.4g}, {hi:.4g}] 1/m reaches outside the measured range "
@@ -104,11 +107,60 @@ def validate_psd(inp: StageInput) -> Preview:
                                 f"{name}.extend = 'power_law' or 'zero'", key=f"{name}.extend")
     if isinstance(inp["interface.eta"], str) and (topography is None or "coherence" not in topography.variables):
         why = topography.attrs.get("pairing", "") if topography is not None else ""
-        raise UserError("eta = 'measured' needs both surfaces of kind 'topography', paired on the same grid"
-                        + (f" ({why})" if why else ""), key="interface.eta")
+        raise UserError("eta = 'measured' needs both surfaces of kind 'topography' (or 'container'), paired on the same "
+                        "grid" + (f" ({why})" if why else ""), key="interface.eta")
     size = log_grid_size(lo, hi, inp["numerics.points_per_decade"], knots)
     grid = {"q": log_grid(lo, hi, inp["numerics.points_per_decade"], knots)} if size <= 10**6 else {}
     return Preview(sizes={"q": size}, ranges={"q": (lo, hi)}, keys={"q": "numerics.points_per_decade"}, coords=grid)
+
+
+def _surface(inp: StageInput, name: str, q: xr.DataArray, draw):
+    """One surface's PSD on the grid (with dimension draw when measured and drawn), its attributes
+    and its standard error on the grid (0: analytic, smooth or a file without errors)."""
+    spec, q_values = inp[name], q.values
+    err = np.zeros(q_values.size)
+    if not is_rough(spec):
+        return xr.zeros_like(q), {"surface": "smooth"}, err
+    if spec["kind"] == "self_affine":
+        attrs = {"surface": "self-affine", "H": spec["H"], "qL": spec["qL"], "q0": spec["q0"], "q1": spec["q1"]}
+        factor = float(self_affine_hrms_factor(spec["H"], spec["qL"], spec["q0"], spec["q1"]))
+        if spec.get("hrms") is not None:
+            C0 = inp.sweep(f"hrms_{name}", spec["hrms"]) ** 2 / factor
+        else:
+            C0 = xr.DataArray(spec["C0"])
+        shape = xr.DataArray(self_affine_psd(q_values, spec["H"], spec["qL"], spec["q0"], spec["q1"], 1.0), dims=("q",))
+        return C0 * shape, attrs, err
+    if is_measured(spec):
+        ds = inp.upstream["topography"]
+        values, attrs = measured_psd_on_grid(ds, name, q_values, spec["extend"])
+        err = psd_error_grid(ds, name, q_values, spec["extend"])
+        if draw is None:
+            return xr.DataArray(values, dims=("q",)), attrs, err
+        attrs["draws"] = "draw 0: the measured PSD; draws 1..N: C* = C n / Gamma(n + 1, 1) per bin (n = (C / error)^2)"
+        return drawn_psd(draw, ds, name, q_values, spec["extend"], inp["bands.seed"]), attrs, err
+    values, attrs = _measured(name, spec, inp.files[f"{name}.path"], q_values)
+    return xr.DataArray(values, dims=("q",)), dict(attrs, error="none known (a PSD file carries no errors)"), err
+
+
+def _combined(inp: StageInput, surfaces, q: xr.DataArray, draw):
+    """C(q, eta) of the pair (eq 52), how it was formed, and eta with its standard error on the grid."""
+    both = is_rough(inp["substrate"]) and is_rough(inp["solid"])
+    if isinstance(inp["interface.eta"], str):  # "measured": eta(q) from paired topographies (validate_psd checked them)
+        ds = inp.upstream["topography"]
+        eta0 = xr.DataArray(measured_coherence_on_grid(ds, q.values), dims=("q",)).assign_coords(q=q)
+        eta = eta0 if draw is None else drawn_coherence(draw, ds, q.values, inp["bands.seed"]).assign_coords(q=q)
+        combined = xr.apply_ufunc(psd_combined, surfaces["substrate"], surfaces["solid"], eta,
+                                  dask="parallelized", output_dtypes=[float])
+        how = ("C = (sqrt C1 - eta sqrt C2)^2 + (1 - eta^2) C2 (eq 52) with the measured eta(q) of the topography "
+               "stage (interpolated in log q, held constant beyond the measured range)")
+        return combined, how, eta0, xr.DataArray(coherence_error_grid(ds, q.values), dims=("q",))
+    if both:
+        eta = inp.sweep("eta", inp["interface.eta"])
+        combined = xr.apply_ufunc(psd_combined, surfaces["substrate"], surfaces["solid"], eta, dask="parallelized",
+                                  output_dtypes=[float])
+        return combined, "C = (sqrt C1 - eta sqrt C2)^2 + (1 - eta^2) C2 (eq 52, non-negative form)", eta, 0.0
+    combined = surfaces["substrate"] + surfaces["solid"]
+    return combined, "only one surface is rough: C = C1 + C2 (eta has no effect)", xr.DataArray(0.0), 0.0
 
 
 def compute_psd(inp: StageInput) -> xr.Dataset:
@@ -116,54 +168,26 @@ def compute_psd(inp: StageInput) -> xr.Dataset:
     lo, hi, knots = _q_range(inp, topography)
     q_values = log_grid(lo, hi, inp["numerics.points_per_decade"], knots)
     q = xr.DataArray(q_values, dims=("q",))
-    surfaces: dict[str, xr.DataArray] = {}
+    draws = inp["bands.draws"]
+    draw = inp.sweep("draw", draws) if np.ndim(draws) else None
+    surfaces, errors = {}, {}
     for name in SURFACES:
-        spec = inp[name]
-        if not is_rough(spec):
-            da = xr.zeros_like(q)
-            attrs = {"surface": "smooth"}
-        elif spec["kind"] == "self_affine":
-            attrs = {"surface": "self-affine", "H": spec["H"], "qL": spec["qL"], "q0": spec["q0"], "q1": spec["q1"]}
-            factor = float(self_affine_hrms_factor(spec["H"], spec["qL"], spec["q0"], spec["q1"]))
-            if spec.get("hrms") is not None:
-                hrms = inp.sweep(f"hrms_{name}", spec["hrms"])
-                C0 = hrms**2 / factor
-            else:
-                C0 = xr.DataArray(spec["C0"])
-            shape = xr.DataArray(self_affine_psd(q_values, spec["H"], spec["qL"], spec["q0"], spec["q1"], 1.0), dims=("q",))
-            da = C0 * shape
-        elif spec["kind"] == "topography":
-            values, attrs = measured_psd_on_grid(inp.upstream["topography"], name, q_values, spec["extend"])
-            da = xr.DataArray(values, dims=("q",))
-        else:
-            values, attrs = _measured(name, spec, inp.files[f"{name}.path"], q_values)
-            da = xr.DataArray(values, dims=("q",))
+        da, attrs, err = _surface(inp, name, q, draw)
         da = da.assign_coords(q=q).transpose(..., "q")
         da.attrs = attrs
-        surfaces[name] = da
-    both = is_rough(inp["substrate"]) and is_rough(inp["solid"])
-    if isinstance(inp["interface.eta"], str):  # "measured": eta(q) from paired topographies (validate_psd checked them)
-        eta_q = xr.DataArray(measured_coherence_on_grid(inp.upstream["topography"], q_values), dims=("q",))
-        combined = xr.apply_ufunc(psd_combined, surfaces["substrate"], surfaces["solid"], eta_q.assign_coords(q=q),
-                                  dask="parallelized", output_dtypes=[float])
-        how = ("C = (sqrt C1 - eta sqrt C2)^2 + (1 - eta^2) C2 (eq 52) with the measured eta(q) of the topography "
-               "stage (interpolated in log q, held constant beyond the measured range)")
-    elif both:
-        eta = inp.sweep("eta", inp["interface.eta"])
-        combined = xr.apply_ufunc(
-            psd_combined, surfaces["substrate"], surfaces["solid"], eta, dask="parallelized", output_dtypes=[float]
-        )
-        how = "C = (sqrt C1 - eta sqrt C2)^2 + (1 - eta^2) C2 (eq 52, non-negative form)"
-    else:
-        combined = surfaces["substrate"] + surfaces["solid"]
-        how = "only one surface is rough: C = C1 + C2 (eta has no effect)"
+        surfaces[name], errors[name] = da, xr.DataArray(err, dims=("q",), coords={"q": q})
+    combined, how, eta, eta_err = _combined(inp, surfaces, q, draw)
     combined = combined.transpose(..., "q")
     combined.attrs = {"formula": how}
+    nominal = {k: v.isel(draw=0, drop=True) if "draw" in v.dims else v for k, v in surfaces.items()}
+    combined_err = xr.apply_ufunc(combined_psd_error, nominal["substrate"], nominal["solid"], eta, errors["substrate"],
+                                  errors["solid"], eta_err, dask="parallelized", output_dtypes=[float])
     hrms = xr.apply_ufunc(hrms_from_psd, q, combined, input_core_dims=[["q"], ["q"]], dask="parallelized", output_dtypes=[float])
     slope = xr.apply_ufunc(rms_slope_from_psd, q, combined, input_core_dims=[["q"], ["q"]], dask="parallelized", output_dtypes=[float])
     ds = xr.Dataset(
         {"psd_substrate": surfaces["substrate"], "psd_solid": surfaces["solid"], "psd_combined": combined,
-         "hrms_combined": hrms, "rms_slope_combined": slope},
+         "hrms_combined": hrms, "rms_slope_combined": slope, "psd_substrate_error": errors["substrate"],
+         "psd_solid_error": errors["solid"], "psd_combined_error": combined_err.transpose(..., "q")},
     )
     ds.attrs["q_lower_cutoff"] = float(q_values[0])
     return ds
@@ -181,14 +205,15 @@ def _files(name: str) -> FileInput:
     return FileInput(f"{name}.path", reader="spectrum", options=options)
 
 
-register(
+STAGE = register(
     Stage(
         name="psd",
-        version="1",
+        version="2",
         compute=compute_psd,
-        params=("substrate", "solid", "interface.eta", "grid.q_min", "grid.q_max", "numerics.points_per_decade"),
+        params=("substrate", "solid", "interface.eta", "grid.q_min", "grid.q_max", "numerics.points_per_decade",
+                "bands.draws", "bands.seed"),
         # a measured surface's spectrum comes from the topography stage: of it, only how to extend it
-        reads=surface_reads({"topography": ("extend",)}),
+        reads=surface_reads({"topography": ("extend",), "container": ("extend",)}),
         files=(_files("substrate"), _files("solid")),
         requires=("topography",),
         needed=lambda values: ("topography",) if needs_topography(values) else (),
@@ -200,6 +225,11 @@ register(
             "psd_combined": Var("m^4", "combined power spectral density C(q) of the pair"),
             "hrms_combined": Var("m", "rms roughness of the combined surface (from the PSD)"),
             "rms_slope_combined": Var("1", "rms slope of the combined surface (from the PSD)"),
+            "psd_substrate_error": Var("m^4", "statistical standard error of C1 on the grid (0: analytic or no errors "
+                                       "known)"),
+            "psd_solid_error": Var("m^4", "statistical standard error of C2 on the grid (0: analytic or no errors known)"),
+            "psd_combined_error": Var("m^4", "standard error of the combined PSD, linear propagation of the errors of "
+                                      "C1, C2 and eta (measured spectra)"),
         },
         doc="C1(q), C2(q) on a log-spaced q grid and the combined C(q, eta) (eq 52).",
     )
