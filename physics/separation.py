@@ -380,3 +380,52 @@ def mean_separation(p, s, weight, count, s_tail, q_tail, *, E_star, alpha, refin
         extra = _cumulative_at(weight * yang_persson_J(z), count) + 0.5 * s_tail * yang_persson_J(zt) / q_tail[..., None]
         u = u + 6.0 * (1.0 - alpha) / np.sqrt(np.pi) * extra
     return u
+
+
+def gaussian_integral(s, a):
+    """F1(s) = \\int_0^s exp(-a^2 / s'^2) ds' in closed form (units of ``s``), 0 where a/s > 6.
+
+    .. math:: F_1(s) = s\\, e^{-z^2} \\big(1 - \\sqrt{\\pi}\\, z\\, \\mathrm{erfcx}(z)\\big), \\qquad z = a/s
+
+    (= s exp(-z^2) - sqrt(pi) a erfc(z)): the tail of :func:`separation_log_slope`, where q(s) is
+    constant. ``s`` >= 0 (dimensionless, like 1/w), ``a`` = p/E* >= 0, broadcast. See docs/theory.md,
+    section "Interface: stiffness, conductance, leakage".
+    """
+    s, a = np.broadcast_arrays(np.asarray(s, dtype=float), np.asarray(a, dtype=float))
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore", under="ignore"):
+        z = a / s
+        value = s * np.exp(-z * z) * (1.0 - np.sqrt(np.pi) * z * erfcx(z))
+    return np.where((s > 0) & (z <= 6.0), value, 0.0)
+
+
+def separation_log_slope(p, s, weight, count, s_tail, q_tail, *, E_star, alpha, refinement="none"):
+    """D(p) = -du/d(ln p) (m), eq 57 differentiated analytically: the contact stiffness is K = p / D.
+
+    With d E1(x^2)/dp = -2 exp(-x^2)/p (x = w p/E*), on the nodes of :func:`mean_separation`:
+
+    .. math:: D = \\sqrt{\\pi}\\, \\alpha \\int_{q_L}^{\\zeta q_L} q^2 C w\\, e^{-(w p/E^*)^2} dq
+              = \\frac{2 \\alpha}{\\sqrt{\\pi}} \\int_0^{1/w(\\zeta q_L)} e^{-(p/(E^* s))^2} \\frac{ds}{q(s)}
+
+    tail [0, s_tail] in closed form (:func:`gaussian_integral`). Yang-Persson: alpha -> alpha +
+    3 (1 - alpha) erf(x)^2 under the integral (d/dp of 3 (1 - alpha) J(x)); on the tail the midpoint of
+    erf^2's bounds erf(a/s_tail)^2 and 1 (error below s_tail / S). D -> u0 as p -> 0 (seed eq 59).
+
+    Parameters: ``p`` (Pa, > 0, broadcast against the nodes' leading dims); the nodes of
+    :func:`separation_nodes`; ``E_star`` (Pa); ``alpha`` (0 < alpha <= 1); ``refinement``
+    (:data:`REFINEMENTS`). Returns D (m), shape (..., m): one value per upper limit zeta qL; 0
+    where the combined PSD vanishes. References: docs/theory.md, section "Interface: stiffness,
+    conductance, leakage"; Persson, Phys. Rev. Lett. 99, 125502 (2007); Yang & Persson, J. Phys.:
+    Condens. Matter 20, 215214 (2008).
+    """
+    a = np.asarray(p, dtype=float)[..., None] / E_star
+    with np.errstate(divide="ignore", over="ignore", under="ignore", invalid="ignore"):
+        z = np.where(s > 0, a / np.where(s > 0, s, 1.0), np.inf)
+        zt = np.where(s_tail > 0, a / np.where(s_tail > 0, s_tail, 1.0), np.inf)
+    gauss = np.exp(-np.minimum(z * z, 800.0))
+    tail = gaussian_integral(s_tail, a) / q_tail[..., None]
+    if refinement == "yang_persson":
+        gauss = gauss * (alpha + 3.0 * (1.0 - alpha) * erf(z) ** 2)
+        tail = tail * (alpha + 1.5 * (1.0 - alpha) * (1.0 + erf(zt) ** 2))
+    else:
+        gauss, tail = alpha * gauss, alpha * tail
+    return 2.0 / np.sqrt(np.pi) * (_cumulative_at(weight * gauss, count) + tail)

@@ -107,7 +107,7 @@ def validate_bem(inp: StageInput) -> None:
         measured_maps(inp, names)
 
 
-def _band(inp: StageInput, q: np.ndarray, names: tuple[str, ...]) -> dict:
+def bem_band(inp: StageInput, q: np.ndarray, names: tuple[str, ...]) -> dict:
     """The map and its band: grid n, side L, pixel dx, q_cut, zeta_bem, what limits them, the
     realizations and seed, and (measured) the band-limited maps."""
     n_w = inp["bem.pixels_per_wavelength"]
@@ -126,7 +126,7 @@ def _band(inp: StageInput, q: np.ndarray, names: tuple[str, ...]) -> dict:
     return dict(n=n, R=1, seed=None, L=L, dx=dx, q_cut=q_cut, zeta=zeta_bem, limit=limit, maps=maps, h=h_maps)
 
 
-def _eta_values(inp: StageInput, psd: xr.Dataset, names, C1, C2) -> np.ndarray:
+def bem_eta_values(inp: StageInput, psd: xr.Dataset, names, C1, C2) -> np.ndarray:
     """The coherences solved for: NaN alone when eta(q) is measured (in the maps and in the
     theory's combined PSD), the psd stage's eta sweep, or the scene's single value."""
     if names or isinstance(inp["interface.eta"], str):
@@ -138,27 +138,28 @@ def _eta_values(inp: StageInput, psd: xr.Dataset, names, C1, C2) -> np.ndarray:
     return np.atleast_1d(float(np.atleast_1d(inp["interface.eta"])[0]))
 
 
+def map_pairs(band: dict, q, C1, C2, eta_values):
+    """(eta index, realization, h1, h2) of every map pair to solve on: the measured maps, or for
+    each realization the synthesized pair at every eta (the same noise for every eta)."""
+    if band["maps"] is not None:
+        yield 0, 0, band["h"]["substrate"], band["h"]["solid"]
+        return
+    for r in range(band["R"]):
+        noise = white_noise_pair(band["n"], band["seed"], r, band=band["zeta"])
+        for j, eta in enumerate(eta_values):
+            yield (j, r) + synthesize_pair(q, C1, C2, eta, band["n"], band["q_cut"], noise=noise)
+
+
 def _solve_all(inp, band, q, C1, C2, E_star, p_values, eta_values, edges) -> dict:
     """Every map pair solved at every pressure: area, gap, histogram and overflow over
     (p, eta, realization), and the composite's rms height and slope over (eta, realization)."""
-    n, R, dx = band["n"], band["R"], band["dx"]
-
-    def pairs():
-        """(eta index, realization, h1, h2) of every map pair to solve on."""
-        if band["maps"] is not None:
-            yield 0, 0, band["h"]["substrate"], band["h"]["solid"]
-            return
-        for r in range(R):
-            noise = white_noise_pair(n, band["seed"], r, band=band["zeta"])
-            for j, eta in enumerate(eta_values):
-                yield (j, r) + synthesize_pair(q, C1, C2, eta, n, band["q_cut"], noise=noise)
-
+    R, dx = band["R"], band["dx"]
     shape = (p_values.size, eta_values.size, R)
     out = {k: np.empty(shape) for k in ("area", "mean_gap", "overflow")}
     out["histogram"] = np.empty(shape + (edges.shape[-1] - 1,))
     out["hrms"], out["slope"] = np.empty(shape[1:]), np.empty(shape[1:])
     order = np.argsort(p_values)  # increasing load: each solve starts from the previous one
-    for j, r, h1, h2 in pairs():
+    for j, r, h1, h2 in map_pairs(band, q, C1, C2, eta_values):
         out["hrms"][j, r] = float(np.std(h1 - h2))
         out["slope"][j, r] = rms_slope_of_map(h1 - h2, dx)
         res = solve_pair(h1, h2, dx, E_star, p_values[order], tolerance=inp["numerics.bem_tolerance"],
@@ -216,7 +217,7 @@ def compute_bem(inp: StageInput) -> xr.Dataset:
     E_star = e_star(inp)
     names = map_surfaces(inp)
     check_eta(inp, names)
-    band = _band(inp, q, names)
+    band = bem_band(inp, q, names)
     zeta_bem, limit = band["zeta"], band["limit"]
     contact, separation = inp.upstream["contact"], inp.upstream["separation"]
     G = _at_zeta(contact, "G", zeta_bem, "contact", limit)
@@ -224,7 +225,7 @@ def compute_bem(inp: StageInput) -> xr.Dataset:
     theory_gap = _at_zeta(separation, "mean_separation", zeta_bem, "separation", limit)
     p_values = np.atleast_1d(np.asarray(inp["load.p"], dtype=float))
     has_eta = "eta" in psd["psd_combined"].dims
-    eta_values = _eta_values(inp, psd, names, C1, C2)
+    eta_values = bem_eta_values(inp, psd, names, C1, C2)
     nb = inp["numerics.bem_stress_bins"]
     level = (np.arange(nb) + 0.5) / nb
     # histogram edges per (p, eta): the contact stage's adaptive stress grid, top = p + width sqrt(G)
