@@ -85,7 +85,7 @@ def sealing_bisection(solve, h1, h2, known, axis, steps, p_max):
 
 def _solve_exact(inp, band, q, C1, C2, E_star, p_values, eta_values) -> dict:
     """Per (p, eta, realization): area, mean gap, exact stiffness and flow factor; per (eta,
-    realization): the sealing pressure and the contact area there (mean of the two axes)."""
+    realization): the sealing pressure (where neither axis percolates any more) and the area there."""
     step = float(inp["numerics.interface_bem_step"])
     shape = (p_values.size, eta_values.size, band["R"])
     out = {k: np.empty(shape) for k in ("area", "gap", "stiffness", "flow")}
@@ -108,7 +108,8 @@ def _solve_exact(inp, band, q, C1, C2, E_star, p_values, eta_values) -> dict:
         known = list(zip(pressures, at["gap"], at["area"]))
         seals = [sealing_bisection(solve, h1, h2, known, axis, inp["numerics.interface_bem_bisections"],
                                    10.0 * E_star) for axis in (0, 1)]
-        out["seal"][j, r], out["seal_area"][j, r] = np.mean(seals, axis=0)
+        # the flow stops when neither axis percolates: the larger of the two thresholds
+        out["seal"][j, r], out["seal_area"][j, r] = max(seals) if not np.isnan(seals).any() else (np.nan, np.nan)
     return out
 
 
@@ -201,8 +202,8 @@ register(
             "exact_flow_factor_mean": Var("m^3", "exact flow factor, mean over realizations"),
             "exact_flow_factor_std": Var("m^3", "exact flow factor, standard deviation over realizations"),
             "exact_leak_rate": Var("m^3/s", "leak rate of the seal from the exact flow factor (mean)"),
-            "exact_sealing_pressure": Var("Pa", "load at which the BEM's open area stops percolating (mean of the "
-                                                "two axes)", attrs={"nan_reason": _NAN}),
+            "exact_sealing_pressure": Var("Pa", "load at which the BEM's open area stops percolating along both "
+                                                "axes (flow stops)", attrs={"nan_reason": _NAN}),
             "exact_percolation_area": Var("1", "BEM contact area at the sealing pressure", attrs={"nan_reason": _NAN}),
             "theory_stiffness": Var("Pa/m", "contact stiffness of the theory on the BEM band"),
             "theory_leak_rate_critical_junction": Var("m^3/s", "critical-junction leak rate on the BEM band"),
