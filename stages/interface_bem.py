@@ -33,7 +33,7 @@ register_params(
     "numerics",
     Param("interface_bem_step", "quantity", "", default=0.05, lo=0.0, hi=0.5, lo_open=True,
           doc="the BEM stiffness is the central difference of the mean gap over p exp(+-step)"),
-    Param("interface_bem_bisections", "int", default=12, lo=1, hi=60,
+    Param("interface_bem_bisections", "int", default=8, lo=1, hi=60,
           doc="bisection steps in ln p for the BEM's sealing pressure (the bracket shrinks 2^steps times)"),
 )
 
@@ -179,7 +179,8 @@ def compute_interface_bem(inp: StageInput) -> xr.Dataset:
     return ds.isel(p=0) if np.ndim(inp["load.p"]) == 0 else ds
 
 
-_ZERO = "NaN where both leak rates are 0 (no open path in either)"
+_ZERO = ("NaN where both leak rates are 0; +inf where only the exact one is (the theory still leaks, the BEM map "
+         "is closed)")
 _NAN = "NaN where the bracket is not found: closed at every load asked for, or open up to 10 E*"
 register(
     Stage(

@@ -54,12 +54,23 @@ def compute_stiffness(inp: StageInput) -> xr.Dataset:
     K.attrs = {"formula": "K = p / D, D = -du/dln p = sqrt(pi) alpha int q^2 C w exp(-(w p/E*)^2) dq",
                "alpha": settings["alpha"], "refinement": settings["refinement"],
                "refinement_description": REFINEMENTS[settings["refinement"]]}
-    D.attrs = {"formula": "D = -p du/dp = (2 alpha/sqrt(pi)) int_0^(1/w) exp(-(p/(E* s))^2) ds/q(s) (+ tail in closed form)"}
+    D.attrs = {"formula": "D = -p du/dp = (2 alpha/sqrt(pi)) int_0^(1/w) exp(-(p/(E* s))^2) ds/q(s) "
+                          "(+ tail in closed form)"}
     u0 = inp.upstream["separation"]["separation_u0"]
     with np.errstate(divide="ignore"):
         small = xr.apply_ufunc(np.divide, p, u0, dask="parallelized", output_dtypes=[float])
     return xr.Dataset({"contact_stiffness": K, "stiffness_length": D, "small_load_stiffness": small.transpose(*order),
                        "E_star": xr.DataArray(E_star)})
+
+
+def _point_bytes(params, wanted, upstream) -> int:
+    """Per (p, eta) point: the Gaussian factor on every separation node (a few float64 temporaries),
+    plus one value per magnification."""
+    nq = upstream["psd"].sizes["q"] if "psd" in upstream else 200
+    nodes = (nq + params["numerics.separation_depth"] * params["numerics.separation_panels_per_decade"] + 2) \
+        * params["numerics.separation_gauss_points"]
+    zetas = nq if isinstance(params["contact.zeta"], str) else np.size(params["contact.zeta"])
+    return int(8 * (4 * nodes + zetas))
 
 
 INFINITE = ("+inf where the interface adds no compliance: the surfaces fit exactly (combined PSD zero, e.g. "
@@ -84,6 +95,7 @@ register(
         figures=(Figure("stiffness", "contact stiffness K = -dp/du against p/E*, and K u0/p",
                         ("stiffness", "separation"), figure_stiffness),),
         doc="Normal contact stiffness per unit area K(p, zeta, eta) = -dp/du, analytic in p from eq 57.",
+        point_bytes=_point_bytes,
         main_outputs=("contact_stiffness",),
         tolerance=1e-4,
     )

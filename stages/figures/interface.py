@@ -27,7 +27,7 @@ def figure_stiffness(results):
         ax.loglog(x, K, "-", color=f"C{k}", label=label + _infinite_note(K))
         ax.loglog(x, small, ":", color=f"C{k}", linewidth=0.9)
         with np.errstate(divide="ignore", invalid="ignore"):
-            ax2.semilogx(x, K / small, "-", color=f"C{k}", label=label)
+            ax2.loglog(x, K / small, "-", color=f"C{k}", label=label)
     ax.set_xlabel("p / E*")
     ax.set_ylabel("K = -dp/du (Pa/m)")
     ax.set_title("contact stiffness (dotted: small-load limit p/u0)", fontsize=9)

@@ -36,7 +36,8 @@ def figure_interface_bem(results):
         x, c = d["p"].values / E_star, f"C{k}"
         axes[0].loglog(x, _positive(d["theory_leak_rate_critical_junction"]), "-", color=c,
                        label=f"critical junction, {label}")
-        axes[0].loglog(x, _positive(d["theory_leak_rate_effective_medium"]), "--", color=c, label=f"effective medium, {label}")
+        axes[0].loglog(x, _positive(d["theory_leak_rate_effective_medium"]), "--", color=c,
+                       label=f"effective medium, {label}")
         scale = d["exact_leak_rate"] / d["exact_flow_factor_mean"]
         axes[0].errorbar(x, _positive(d["exact_leak_rate"]), yerr=np.nan_to_num(d["exact_flow_factor_std"] * scale),
                          fmt="o", color=c, markersize=4, capsize=2, label=f"exact (BEM + Reynolds), {label}")
