@@ -82,7 +82,8 @@ def figure_leakage(results):
         for method, style in (("critical_junction", "-"), ("effective_medium", "--")):
             Q = ds[f"leak_rate_{method}"].values * 1e9 * 3600  # m^3/s -> uL/h
             shown = np.where(Q > 0, Q, np.nan)
-            ax.loglog(p, shown, style, color=f"C{k}", label=f"{label}, {method.replace('_', ' ')}")
+            note = " (sealed at every load)" if np.all(Q == 0) else ""
+            ax.loglog(p, shown, style, color=f"C{k}", label=f"{label}, {method.replace('_', ' ')}{note}")
             seal = float(ds[f"sealing_pressure_{method}"])
             if 0 < seal < p.max() * 1e6 * 10:
                 ax.axvline(seal / 1e6, color=f"C{k}", linestyle=style, linewidth=0.7, alpha=0.6)
