@@ -22,7 +22,7 @@ See docs/theory.md, section "Interface: stiffness, conductance, leakage", and do
 from __future__ import annotations
 
 import numpy as np
-from scipy.special import erf, erfinv
+from scipy.special import erf, erfinv, ndtr
 
 from .contact import contact_area_ratio, persson_G
 from .quadrature import cumulative_integral, integral_to, inverse_cumulative_integral, loglog_interp
@@ -204,23 +204,23 @@ def critical_junction(q, C, p, *, E_star, alpha, refinement="none", numerics=Non
 
 
 def magnification_nodes(q, C, p_min, E_star, points_per_decade=10):
-    """Magnifications at which P(u) is resolved: the grid's nodes q/qL and, below the first one,
-    1 + delta on a geometric grid of delta (``points_per_decade``) from where the contact area of
-    the smallest pressure ``p_min`` (Pa) starts to fall. There G ~ (pi/4) E*^2 qL^4 C(qL) delta,
-    so A(1 + delta) drops where delta ~ p_min^2 / (pi E*^2 qL^4 C(qL)); the grid starts 1e3 below."""
-    zeta = np.asarray(q, dtype=float) / q[0]
+    """Magnifications at which P(u) is resolved: 1 and 1 + delta, delta geometric
+    (``points_per_decade``) up to q[-1]/qL - 1, from where the contact area of the smallest
+    pressure ``p_min`` (Pa) starts to fall. Near zeta = 1, G ~ (pi/4) E*^2 qL^4 C(qL) delta, so
+    A(1 + delta) drops where delta ~ p_min^2 / (pi E*^2 qL^4 C(qL)); the grid starts 1e3 below
+    (and at most 1e-14 of the band below its top). Independent of the q grid, so the cost of P(u)
+    grows with the q grid only through u_bar."""
+    top = q[-1] / q[0] - 1.0
     rate = np.pi * E_star**2 * q[0] ** 4 * float(np.asarray(C)[0])
-    first = zeta[1] - 1.0
-    lo = max(1e-3 * p_min**2 / rate, 1e-14 * first) if rate > 0 else first
-    if lo >= first:
-        return zeta
-    n = max(2, int(np.ceil(np.log10(first / lo) * points_per_decade)))
-    return np.concatenate([[1.0], 1.0 + np.geomspace(lo, first, n + 1)[:-1], zeta[1:]])
+    lo = 1e-3 * p_min**2 / rate if rate > 0 else 1e-6 * top
+    lo = min(max(lo, 1e-14 * top), 1e-2 * top)
+    n = max(2, int(np.ceil(np.log10(top / lo) * points_per_decade)))
+    return np.concatenate([[1.0], 1.0 + np.geomspace(lo, top, n)])
 
 
-def gap_distribution(q, C, p, *, E_star, alpha, refinement="none", numerics=None, hermite_points=16,
-                     points_per_decade=10):
-    """P(u) of Persson's theory as weighted atoms: (u (m), weight) per pressure, plus A(q1)/A0.
+def gap_distribution(q, C, p, *, E_star, alpha, refinement="none", numerics=None, bins_per_decade=20,
+                     points_per_decade=10, span=(1e-8, 1e2)):
+    """P(u) of Persson's theory as the mass in logarithmic bins of u, per pressure, plus A(q1)/A0.
 
     .. math:: P(u) = \\frac{A(\\zeta_1)}{A_0}\\delta(u) + \\int_1^{\\zeta_1} d\\zeta\\,
               \\frac{-A'(\\zeta)}{A_0}\\,\\big[g(u - u_1(\\zeta)) + g(u + u_1(\\zeta))\\big]
@@ -234,36 +234,45 @@ def gap_distribution(q, C, p, *, E_star, alpha, refinement="none", numerics=None
     .. math:: c_k = \\frac{A_k \\bar u_k - A_{k+1}\\bar u_{k+1}}{A_k - A_{k+1}}, \\qquad
               \\sum_k (A_k - A_{k+1})\\, c_k = \\bar u(1) = \\bar u \\text{ of eq 57}
 
-    (only u_bar at the nodes is needed, :func:`gap_above`); the Gaussian by Gauss-Hermite
-    (``hermite_points`` nodes) at the interval's geometric midpoint.
+    (only u_bar at the nodes is needed, :func:`gap_above`), with h at the interval's geometric
+    midpoint. Each reflected Gaussian is put into bins of u exactly, through its distribution
+    function P(|X| <= u) = Phi((u - c)/h) - Phi((-u - c)/h): ``bins_per_decade`` geometric bins from
+    span[0] to span[1] times u_bar(1), one bin below (at half the first edge) and one above (at the
+    last edge). Bins, unlike Gauss-Hermite nodes, resolve the step of Bruggeman's integrand at
+    u^3 = sigma whatever sigma is.
 
     Returns
     -------
-    u : array (K, hermite_points, P)
-        Gaps (m), >= 0.
-    weight : array (K, hermite_points, P)
-        Weights (dimensionless); they sum with ``area_top`` to 1.
+    u : array (B, P)
+        Bin gaps (m): geometric centres, >= 0.
+    weight : array (B, P)
+        Mass in each bin (dimensionless); with ``area_top`` the masses sum to 1.
     area_top : array (P,)
-        A(q1)/A0, the weight of u = 0.
+        A(q1)/A0, the weight of u = 0 (contact).
     """
     p = np.atleast_1d(np.asarray(p, dtype=float))
     zeta = magnification_nodes(q, C, float(p.min()), E_star, points_per_decade)
-    G = persson_G(q, C, zeta * q[0], E_star)
-    areas = contact_area_ratio(p[None, :], G[:, None])  # (K + 1, P)
+    areas = contact_area_ratio(p[None, :], persson_G(q, C, zeta * q[0], E_star)[:, None])  # (K + 1, P)
     ubar = np.zeros_like(areas)
     for k, z in enumerate(zeta[:-1]):
         ubar[k] = gap_above(q, C, z, p, E_star=E_star, alpha=alpha, refinement=refinement, numerics=numerics)
-    drop = areas[:-1] - areas[1:]
-    volume = areas[:-1] * ubar[:-1] - areas[1:] * ubar[1:]
+    drop = np.maximum(areas[:-1] - areas[1:], 0.0)
     with np.errstate(divide="ignore", invalid="ignore"):
-        centre = np.where(drop > 0, np.maximum(volume, 0.0) / np.where(drop > 0, drop, 1.0), 0.0)
+        centre = np.where(drop > 0, np.maximum(areas[:-1] * ubar[:-1] - areas[1:] * ubar[1:], 0.0)
+                          / np.where(drop > 0, drop, 1.0), 0.0)
     qC = q * C
-    mid = np.sqrt(zeta[:-1] * zeta[1:])
-    h = np.sqrt(np.maximum(2.0 * np.pi * (cumulative_integral(q, qC)[-1] - integral_to(q, qC, mid * q[0])), 0.0))
-    xi, w = np.polynomial.hermite_e.hermegauss(int(hermite_points))
-    w = w / np.sqrt(2.0 * np.pi)
-    u = np.abs(centre[:, None, :] + h[:, None, None] * xi[None, :, None])
-    weight = np.maximum(drop, 0.0)[:, None, :] * w[None, :, None]
+    h = np.sqrt(np.maximum(2.0 * np.pi * (cumulative_integral(q, qC)[-1]
+                                          - integral_to(q, qC, np.sqrt(zeta[:-1] * zeta[1:]) * q[0])), 0.0))
+    decades = np.log10(span[1] / span[0])
+    scale = np.where(ubar[0] > 0, ubar[0], 1.0)
+    edges = scale[None, :] * np.geomspace(*span, int(np.ceil(decades * bins_per_decade)) + 1)[:, None]  # (E, P)
+    c, hh, e = centre[:, None, :], h[:, None, None], edges[None, :, :]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        cdf = np.where(hh > 0, ndtr((e - c) / np.where(hh > 0, hh, 1.0)) - ndtr((-e - c) / np.where(hh > 0, hh, 1.0)),
+                       (e >= c).astype(float))  # (K, E, P): P(|X| <= e)
+    mass = np.concatenate([cdf[:, :1], np.diff(cdf, axis=1), 1.0 - cdf[:, -1:]], axis=1)  # (K, E + 1, P)
+    weight = np.einsum("kp,kbp->bp", drop, np.clip(mass, 0.0, 1.0))
+    u = np.concatenate([0.5 * edges[:1], np.sqrt(edges[:-1] * edges[1:]), edges[-1:]], axis=0)
     return u, weight, areas[-1]
 
 
@@ -313,14 +322,14 @@ def bruggeman_flow_factor(u, weight, area_top):
 
 
 def leakage_kernel(q, C, p, *, E_star, alpha, refinement="none", numerics=None, area=PERCOLATION_AREA,
-                   hermite_points=16, points_per_decade=10, q_top=None,
+                   bins_per_decade=20, points_per_decade=10, q_top=None,
                    methods=("critical_junction", "effective_medium")):
     """Both theories for every (spectrum, pressure): zeta_c, u1 (m), sigma_cj = u1^3 and sigma_emt (m^3).
 
     ``C`` (..., n) and ``p`` (...) broadcast against each other (as xarray hands them over);
     the spectra are handled one at a time and all of a spectrum's pressures at once, on the band
     [qL, q_top] (default: the whole grid; :func:`band_grid`). A method left out of ``methods``
-    is NaN; ``hermite_points`` and ``points_per_decade`` are those of :func:`gap_distribution`.
+    is NaN; ``bins_per_decade`` and ``points_per_decade`` are those of :func:`gap_distribution`.
 
     Returns
     -------
@@ -342,7 +351,7 @@ def leakage_kernel(q, C, p, *, E_star, alpha, refinement="none", numerics=None, 
             zeta_c, u1 = critical_junction(qs, Cs, flat, area=area, **kw)
             out[0][sel], out[1][sel], out[2][sel] = (v.reshape(ps.shape) for v in (zeta_c, u1, u1**3))
         if "effective_medium" in methods:
-            u, weight, top = gap_distribution(qs, Cs, flat, hermite_points=hermite_points,
+            u, weight, top = gap_distribution(qs, Cs, flat, bins_per_decade=bins_per_decade,
                                               points_per_decade=points_per_decade, **kw)
             out[3][sel] = bruggeman_flow_factor(u, weight, top).reshape(ps.shape)
     return tuple(out)

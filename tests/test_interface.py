@@ -66,7 +66,8 @@ def stiffness_by_difference(p, zeta, C0, h=1e-3):
 
 
 def stiffness_scene(**over):
-    raw = make_scene(outputs={"variables": ["contact_stiffness"]}, load={"p": [E_STAR * x for x in (1e-7, 1e-4, 1e-2, 0.1)]},
+    raw = make_scene(outputs={"variables": ["contact_stiffness"]},
+                     load={"p": [E_STAR * x for x in (1e-7, 1e-4, 1e-2, 0.1)]},
                      contact={"zeta": [4.0, 200.0]}, interface={"eta": [0.0]},
                      numerics={"points_per_decade": 50}, substrate={"q0": f"{Q0!r} 1/m"},
                      solid={"q0": f"{Q0!r} 1/m"})
