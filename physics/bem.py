@@ -72,7 +72,8 @@ def _flat_contact(pressures, stress_edges, nb, shape=None):
     return out
 
 
-def solve_contact(heights, pixel_size, E_star, pressures, *, tolerance=1e-10, stress_edges=None, fields=False):
+def solve_contact(heights, pixel_size, E_star, pressures, *, tolerance=1e-10, stress_edges=None, progress=None,
+                  fields=False):
     """Frictionless non-adhesive contact of an elastic half-space with a rigid periodic surface.
 
     Tamaas' Polonsky-Keer-Rey solver at each mean pressure, on the map's periodic cell,
@@ -94,6 +95,8 @@ def solve_contact(heights, pixel_size, E_star, pressures, *, tolerance=1e-10, st
         Relative tolerance of the solver (dimensionless).
     stress_edges : array (np, nb + 1), optional
         Per pressure, edges of the histogram of the local contact pressure (Pa).
+    progress : callable, optional
+        Called as ``progress(1)`` after each pressure is solved (for a progress bar).
     fields : bool
         Also return the gap maps ``gap``, below.
 
@@ -129,14 +132,7 @@ def solve_contact(heights, pixel_size, E_star, pressures, *, tolerance=1e-10, st
         return _flat_contact(pressures, stress_edges, nb, (nx, ny) if fields else None)
     out = _results(pressures.size, nb, (nx, ny) if fields else None)
     tm = tamaas_module()
-
-    def fresh():
-        model = tm.ModelFactory.createModel(tm.model_type.basic_2d, [float(nx), float(ny)], [nx, ny])
-        model.E = 1.0
-        model.nu = 0.0  # E* = E / (1 - nu^2) = 1 in reduced units
-        return model, tm.PolonskyKeerRey(model, np.ascontiguousarray(surface), float(tolerance))
-
-    model, solver = fresh()
+    model, solver = _pkr(tm, surface, tolerance)
     for i, p in enumerate(pressures):
         for attempt in (0, 1):
             try:
@@ -147,11 +143,23 @@ def solve_contact(heights, pixel_size, E_star, pressures, *, tolerance=1e-10, st
                 # one-node solution can hit it where a cold start does not: retry cold once
                 if attempt:
                     raise SubPixelContact(float(p), (nx, ny), str(exc).strip().splitlines()[-1]) from None
-                model, solver = fresh()
+                model, solver = _pkr(tm, surface, tolerance)
         traction = np.array(model.traction, copy=True).reshape(nx, ny) * E_star
         gap = (np.array(model.displacement, copy=True).reshape(nx, ny) - surface) * pixel_size
         _reduce(out, i, traction, gap, None if stress_edges is None else stress_edges[i])
+        if progress is not None:
+            progress(1)
     return out
+
+
+def _pkr(tm, surface, tolerance):
+    """A fresh tamaas model (E* = 1 in reduced units) and its Polonsky-Keer-Rey solver on the
+    periodic ``surface`` (heights in pixels)."""
+    nx, ny = surface.shape
+    model = tm.ModelFactory.createModel(tm.model_type.basic_2d, [float(nx), float(ny)], [nx, ny])
+    model.E = 1.0
+    model.nu = 0.0  # E* = E / (1 - nu^2) = 1 in reduced units
+    return model, tm.PolonskyKeerRey(model, np.ascontiguousarray(surface), float(tolerance))
 
 
 def _reduce(out, i, traction, gap, edges):
@@ -186,7 +194,7 @@ def contact_pair(h1, h2, pixel_size, E_star, pressures, **kwargs):
     pressures : array
         Mean pressures (Pa), > 0.
     **kwargs
-        ``tolerance``, ``stress_edges`` of :func:`solve_contact`.
+        ``tolerance``, ``stress_edges``, ``progress`` of :func:`solve_contact`.
     """
     h1, h2 = np.asarray(h1, dtype=float), np.asarray(h2, dtype=float)
     if h1.shape != h2.shape:

@@ -19,9 +19,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import scipy.fft
 
 from .spectra import extend_psd, isotropic_factor
+from .lattice import area_lattice, bincount, profile_lattice
 from .synthesis import half_plane_weights, lattice_wavenumbers
 
 # ----------------------------------------------------------------------------------------
@@ -74,10 +74,6 @@ def psd_map(h, sx, sy):
     return area_per_pt**2 * np.abs(np.fft.fft2(h)) ** 2 / ((2.0 * np.pi) ** 2 * sx * sy)
 
 
-def _bincount(idx, weights, nbins):
-    return np.bincount(idx.ravel(), weights=None if weights is None else weights.ravel(), minlength=nbins + 1)[: nbins + 1]
-
-
 def binned_spectra_area(h1, sx, sy, edges, q_max, h2=None):
     """Radially binned 2D spectra of a map (and of a second map on the same grid).
 
@@ -110,33 +106,25 @@ def binned_spectra_area(h1, sx, sy, edges, q_max, h2=None):
     """
     nx, ny = h1.shape
     norm = ((sx / nx) * (sy / ny)) ** 2 / ((2.0 * np.pi) ** 2 * sx * sy)
-    qx = 2.0 * np.pi * np.fft.fftfreq(nx, d=sx / nx)
-    qy = 2.0 * np.pi * np.fft.rfftfreq(ny, d=sy / ny)
-    w = half_plane_weights(ny)
-    q = np.sqrt(qx[:, None] ** 2 + qy[None, :] ** 2)
     nb = edges.size - 1
-    idx = np.searchsorted(edges, q)  # bin i+1 <-> edges[i] < q <= edges[i+1]; 0 and nb+1: outside
-    idx[(q > q_max) | (q == 0.0)] = nb + 1  # dropped
-    idx[idx > nb + 1] = nb + 1
-    wfull = np.broadcast_to(w, q.shape)
-    count = _bincount(idx, wfull, nb + 1)
-    qsum = _bincount(idx, q * wfull, nb + 1)
-    del q
+    idx, w, count, qsum = area_lattice(nx, ny, sx, sy, edges, q_max)
+    import scipy.fft  # imported when a map is analysed, not with the stage declarations
+
     out = {}
     H1 = scipy.fft.rfft2(h1)
     P = H1.real**2 + H1.imag**2
     P *= w
-    out["C11"] = _bincount(idx, P, nb + 1)
+    out["C11"] = bincount(idx, P, nb + 1)
     if h2 is not None:
         H2 = scipy.fft.rfft2(h2)
         np.multiply(H2.real, H2.real, out=P)
         P += H2.imag**2
         P *= w
-        out["C22"] = _bincount(idx, P, nb + 1)
+        out["C22"] = bincount(idx, P, nb + 1)
         np.multiply(H1.real, H2.real, out=P)
         P += H1.imag * H2.imag
         P *= w
-        out["C12"] = _bincount(idx, P, nb + 1)
+        out["C12"] = bincount(idx, P, nb + 1)
         del H2
     del H1, P, idx
     sl = slice(1, nb + 1)
@@ -176,15 +164,12 @@ def binned_spectra_profiles(h1, sx, edges, q_max, hurst, h2=None):
     h1 = h1.reshape(h1.shape[0], -1)
     nx, nprof = h1.shape
     norm = (sx / nx) ** 2 / sx
-    qx = 2.0 * np.pi * np.fft.rfftfreq(nx, d=sx / nx)
     nb = edges.size - 1
-    idx = np.searchsorted(edges, qx)
-    idx[(qx > q_max) | (qx == 0.0)] = nb + 1
-    idx[idx > nb + 1] = nb + 1
+    qx, idx, count, qsum = profile_lattice(nx, nprof, sx, edges, q_max)
     conv = np.zeros_like(qx)
     conv[qx > 0] = isotropic_factor(hurst) / qx[qx > 0]
-    count = np.bincount(idx, minlength=nb + 2)[: nb + 2] * float(nprof)
-    qsum = np.bincount(idx, weights=qx * nprof, minlength=nb + 2)[: nb + 2]
+    import scipy.fft  # imported when a profile is analysed, not with the stage declarations
+
     H1 = scipy.fft.rfft(h1, axis=0)
     out = {"C11": (np.abs(H1) ** 2).sum(axis=1)}
     if h2 is not None:

@@ -25,15 +25,17 @@ See docs/theory.md, section "Friction"; Persson, J. Chem. Phys. 115, 3840 (2001)
 from __future__ import annotations
 
 import numpy as np
-from scipy.special import erf
 
+from .corrections import corrected_area
+from .inputs import require_pressure
 from .quadrature import cumulative_integral, gauss_legendre, running_weighted_integral
+from .special import erf
 from .viscoelastic import modulus_at
 
 
 def _k(sigma0, nu):
     """k = 1 / ((1 - nu^2) sigma0) (1/Pa)."""
-    return 1.0 / ((1.0 - nu * nu) * np.asarray(sigma0, dtype=float))
+    return 1.0 / ((1.0 - nu * nu) * require_pressure(sigma0, "sigma0", positive=True))
 
 
 def angular_integrals(q, v, omega_grid, storage, loss, n_phi):
@@ -117,7 +119,7 @@ def sliding_G(q, C, A, sigma0, nu):
     return 0.5 * k[..., None] ** 2 * cumulative_integral(q, np.asarray(q) ** 3 * C * A)
 
 
-def contact_fraction(G):
+def contact_fraction(G, area_correction="persson", area_gamma=None):
     """Relative contact area at magnification q, P(q) = erf(1/(2 sqrt G)) (dimensionless).
 
     Parameters
@@ -125,14 +127,21 @@ def contact_fraction(G):
     G : array
         G(q; v) of :func:`sliding_G` (dimensionless), >= 0; G = 0 gives 1 (full contact at the
         largest scale).
+    area_correction, area_gamma
+        A contact-area correction (:func:`roughcontact.physics.corrections.corrected_area`):
+        G is the variance of eq 31 in units of sigma0^2, so the same universal map of the
+        argument 1/(2 sqrt G) applies. Default: eq 31 as printed (Persson 2001).
 
     References
     ----------
-    docs/theory.md, section "Friction"; seed eq 31.
+    docs/theory.md, sections "Friction" and "Contact-area corrections"; seed eq 31.
     """
     G = np.asarray(G, dtype=float)
     with np.errstate(divide="ignore"):
-        return erf(np.where(G > 0, 0.5 / np.sqrt(np.where(G > 0, G, 1.0)), np.inf))
+        x0 = np.where(G > 0, 0.5 / np.sqrt(np.where(G > 0, G, 1.0)), np.inf)
+    if area_correction == "persson":
+        return erf(x0)
+    return corrected_area(x0, area_correction, area_gamma)
 
 
 def area_factor(P, correction: str, gamma: float):
@@ -185,7 +194,8 @@ def friction_integrand(q, C, P, S, B, sigma0, nu):
     return 2.0 * k[..., None] * np.asarray(q) ** 3 * C * P * S * B
 
 
-def friction_kernel(q, C, A, B, sigma0, nu, correction="none", gamma=0.5, extras=False, segment_nodes=12):
+def friction_kernel(q, C, A, B, sigma0, nu, correction="none", gamma=0.5, extras=False, segment_nodes=12,
+                    area_correction="persson", area_gamma=None):
     """mu(v) and A/A0(v) from the PSD and the angular integrals (eqs 61-62, 31).
 
     mu is integrated in the variable G: with dG/dq = (k^2/2) q^3 C A,
@@ -216,6 +226,8 @@ def friction_kernel(q, C, A, B, sigma0, nu, correction="none", gamma=0.5, extras
         Also return G(q; v) and d mu / d ln q.
     segment_nodes : int
         Gauss-Legendre nodes per q segment.
+    area_correction, area_gamma
+        The contact-area correction of P(q) (:func:`contact_fraction`).
 
     Returns
     -------
@@ -234,12 +246,12 @@ def friction_kernel(q, C, A, B, sigma0, nu, correction="none", gamma=0.5, extras
         r = np.where(A > 0, B / np.where(A > 0, A, 1.0), 0.0)
 
     def weight(G):
-        P = contact_fraction(G)
+        P = contact_fraction(G, area_correction, area_gamma)
         return P * area_factor(P, correction, gamma)
 
     I, G = running_weighted_integral(q, g, r, weight, nodes=segment_nodes)
     mu = 4.0 / k * I
-    P = contact_fraction(G)
+    P = contact_fraction(G, area_correction, area_gamma)
     area = P[..., -1]
     if extras:
         S = area_factor(P, correction, gamma)

@@ -2,8 +2,8 @@
 conductance per unit nominal area, from the separation law u(p) of the two rough surfaces.
 
 Stiffness (Persson, Phys. Rev. Lett. 99, 125502 (2007)): K = -dp/du, with du/dp taken
-analytically from eq 57 (:func:`roughcontact.physics.separation.separation_log_slope`), so
-K = p / D with D = -du/d(ln p); K -> p/u0 at small load (seed eq 59).
+analytically from eq 57 on the separation's own quadrature nodes (:func:`separation_log_slope`),
+so K = p / D with D = -du/d(ln p); K -> p/u0 at small load (seed eq 59).
 
 Conductance (Barber, Proc. R. Soc. A 459, 53 (2003); Persson, Lorenz & Volokitin, Eur. Phys.
 J. E 31, 3 (2010)): for two elastic half-spaces touching in any set of spots, the electrical
@@ -22,7 +22,75 @@ from __future__ import annotations
 
 import numpy as np
 
-from .separation import separation_log_slope, separation_nodes
+from .separation import energy_factor_terms, node_sum, separation_nodes
+from .special import erf, erfcx
+
+
+def gaussian_integral(s, a):
+    """F1(s) = \\int_0^s exp(-a^2 / s'^2) ds' in closed form (units of ``s``), 0 where a/s > 6.
+
+    .. math:: F_1(s) = s\\, e^{-z^2} \\big(1 - \\sqrt{\\pi}\\, z\\, \\mathrm{erfcx}(z)\\big), \\qquad z = a/s
+
+    (= s exp(-z^2) - sqrt(pi) a erfc(z)): the tail of :func:`separation_log_slope`, where q(s) is
+    constant. ``s`` >= 0 (dimensionless, like 1/w), ``a`` = p/E* >= 0, broadcast. See docs/theory.md,
+    section "Interface: stiffness, conductance, leakage".
+    """
+    s, a = np.broadcast_arrays(np.asarray(s, dtype=float), np.asarray(a, dtype=float))
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore", under="ignore"):
+        z = a / s
+        value = s * np.exp(-z * z) * (1.0 - np.sqrt(np.pi) * z * erfcx(z))
+    return np.where((s > 0) & (z <= 6.0), value, 0.0)
+
+
+def separation_log_slope(p, s, weight, count, s_tail, q_tail, *, E_star, alpha, refinement="none"):
+    """D(p) = -du/d(ln p) (m), eq 57 differentiated analytically: the contact stiffness is K = p / D.
+
+    With d E1(x^2)/dp = -2 exp(-x^2)/p (x = w p/E*), on the nodes of
+    :func:`roughcontact.physics.separation.mean_separation`:
+
+    .. math:: D = \\sqrt{\\pi}\\, \\alpha \\int_{q_L}^{\\zeta q_L} q^2 C w\\, e^{-(w p/E^*)^2} dq
+              = \\frac{2 \\alpha}{\\sqrt{\\pi}} \\int_0^{1/w(\\zeta q_L)} e^{-(p/(E^* s))^2} \\frac{ds}{q(s)}
+
+    tail [0, s_tail] in closed form (:func:`gaussian_integral`). A refinement whose energy factor
+    gives d(P S)/dP = sum_k c_k P^k (:func:`roughcontact.physics.separation.energy_factor_terms`;
+    c_0 = alpha) puts sum_k c_k erf(x)^k in place of alpha under the integral (d/dp of the
+    refinement's J_k(x) is -erf(x)^k exp(-x^2)/p); on the tail, the midpoint of erf^k's bounds
+    erf(a/s_tail)^k and 1 (error below s_tail / S). D -> u0 as p -> 0 (seed eq 59).
+
+    Parameters
+    ----------
+    p : array (...)
+        Nominal pressure (Pa), > 0, broadcast against the nodes' leading dims.
+    s, weight, count, s_tail, q_tail
+        From :func:`roughcontact.physics.separation.separation_nodes`.
+    E_star : float
+        Effective modulus (Pa).
+    alpha : float
+        Persson's gamma, 0 < alpha <= 1.
+    refinement : str
+        A key of :data:`roughcontact.physics.separation.REFINEMENTS`.
+
+    Returns
+    -------
+    array (..., m)
+        D (m) at each upper limit zeta qL; 0 where the combined PSD vanishes.
+
+    References
+    ----------
+    docs/theory.md, section "Interface: stiffness, conductance, leakage"; Persson, Phys. Rev. Lett.
+    99, 125502 (2007); Yang & Persson, J. Phys.: Condens. Matter 20, 215214 (2008).
+    """
+    a = np.asarray(p, dtype=float)[..., None] / E_star
+    with np.errstate(divide="ignore", over="ignore", under="ignore", invalid="ignore"):
+        z = np.where(s > 0, a / np.where(s > 0, s, 1.0), np.inf)
+        zt = np.where(s_tail > 0, a / np.where(s_tail > 0, s_tail, 1.0), np.inf)
+    gauss = np.exp(-np.minimum(z * z, 800.0))
+    body, tail = 0.0, 0.0
+    for k, c in energy_factor_terms(refinement, alpha).items():
+        body = body + c * (erf(z) ** k if k else 1.0)
+        tail = tail + c * (0.5 * (1.0 + erf(zt) ** k) if k else 1.0)
+    tail = tail * gaussian_integral(s_tail, a) / q_tail[..., None]
+    return 2.0 / np.sqrt(np.pi) * (node_sum(weight * gauss * body, count) + tail)
 
 
 def contact_stiffness(p, D):

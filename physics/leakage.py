@@ -22,12 +22,12 @@ See docs/theory.md, section "Interface: stiffness, conductance, leakage", and do
 from __future__ import annotations
 
 import numpy as np
-from scipy.special import erf, erfinv, ndtr
 
 from .contact import contact_area_ratio, persson_G
 from .quadrature import cumulative_integral, integral_to, inverse_cumulative_integral, loglog_interp
 from .roots import illinois
 from .separation import mean_separation, separation_nodes
+from .special import erf, erfinv, ndtr
 
 #: relative contact area at which the non-contact area stops percolating: 0.42 for randomly
 #: rough, isotropic surfaces (Dapp, Luecke, Persson & Mueser, Phys. Rev. Lett. 108, 244301 (2012);

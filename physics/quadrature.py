@@ -13,6 +13,8 @@ wrapped with ``xarray.apply_ufunc`` by the stages).
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 
@@ -120,6 +122,22 @@ def loglog_interp(xq, x, y):
     return _loglog_between(x[i], x[i + 1], y[..., i], y[..., i + 1], xq)
 
 
+def _log_pieces(lo: float, hi: float, points_per_decade: int, knots=()):
+    """The knots of :func:`log_grid` (lo, hi and the knots between) and the nodes per piece."""
+    if not (0 < lo < hi):
+        raise ValueError("log_grid needs 0 < lo < hi")
+    if points_per_decade < 1:
+        raise ValueError("points_per_decade must be >= 1")
+    edges = np.unique(np.concatenate([[lo, hi], [k for k in knots if lo < k < hi]]))
+    counts = [max(1, int(np.ceil(np.log10(b / a) * points_per_decade - 1e-9))) for a, b in zip(edges[:-1], edges[1:])]
+    return edges, counts
+
+
+def log_grid_size(lo: float, hi: float, points_per_decade: int, knots=()) -> int:
+    """The number of nodes :func:`log_grid` gives for these arguments, without building it."""
+    return int(sum(_log_pieces(lo, hi, points_per_decade, knots)[1])) + 1
+
+
 def log_grid(lo: float, hi: float, points_per_decade: int, knots=()) -> np.ndarray:
     """Geometric grid from ``lo`` to ``hi`` with about ``points_per_decade`` nodes per decade.
 
@@ -127,15 +145,8 @@ def log_grid(lo: float, hi: float, points_per_decade: int, knots=()) -> np.ndarr
     piece between consecutive knots, each piece geometric with the spacing closest to the
     requested one. Exact power-law quadrature then needs no node to straddle a kink.
     """
-    if not (0 < lo < hi):
-        raise ValueError("log_grid needs 0 < lo < hi")
-    if points_per_decade < 1:
-        raise ValueError("points_per_decade must be >= 1")
-    edges = np.unique(np.concatenate([[lo, hi], [k for k in knots if lo < k < hi]]))
-    pieces = []
-    for a, b in zip(edges[:-1], edges[1:]):
-        n = max(1, int(np.ceil(np.log10(b / a) * points_per_decade - 1e-9)))
-        pieces.append(np.geomspace(a, b, n + 1)[:-1])
+    edges, counts = _log_pieces(lo, hi, points_per_decade, knots)
+    pieces = [np.geomspace(a, b, n + 1)[:-1] for a, b, n in zip(edges[:-1], edges[1:], counts)]
     pieces.append([hi])
     return np.concatenate(pieces)
 
@@ -157,13 +168,22 @@ def gauss_legendre_panels(edges, order: int):
         of ``f`` from ``edges[..., 0]`` to ``edges[..., -1]``.
     """
     edges = np.asarray(edges, dtype=float)
-    t, w = np.polynomial.legendre.leggauss(int(order))
+    t, w = _leggauss(int(order))
     a, b = edges[..., :-1, None], edges[..., 1:, None]
     half = 0.5 * (b - a)
     nodes = 0.5 * (a + b) + half * t
     weights = half * w
     shape = edges.shape[:-1] + (-1,)
     return nodes.reshape(shape), np.broadcast_to(weights, nodes.shape).reshape(shape)
+
+
+@functools.lru_cache(maxsize=64)
+def _leggauss(order: int):
+    """Gauss-Legendre nodes and weights on [-1, 1] (cached: the kernels ask for the same few
+    orders thousands of times; the arrays are read-only)."""
+    t, w = np.polynomial.legendre.leggauss(order)
+    t.flags.writeable = w.flags.writeable = False
+    return t, w
 
 
 def inverse_cumulative_integral(x, y, level):

@@ -25,9 +25,6 @@ stiffness, conductance, leakage"; Dapp, Luecke, Persson & Mueser, Phys. Rev. Let
 from __future__ import annotations
 
 import numpy as np
-import scipy.sparse as sp
-from scipy.sparse.csgraph import connected_components
-from scipy.sparse.linalg import splu
 
 
 def face_conductances(c, axis):
@@ -41,6 +38,7 @@ def face_conductances(c, axis):
 
 def _graph(faces, shape):
     """Sparse adjacency (weights = face conductances) of the periodic grid from the two face arrays."""
+    import scipy.sparse as sp  # on first use: the stage declarations load this module at every run
     idx = np.arange(np.prod(shape)).reshape(shape)
     rows, cols, vals = [], [], []
     for axis, f in enumerate(faces):
@@ -61,6 +59,8 @@ def percolates(open_cells, axis):
     the winding number: the open region percolates along ``axis`` exactly when a cluster is
     reached twice with different windings.
     """
+    from scipy.sparse.csgraph import connected_components
+
     open_cells = np.asarray(open_cells, dtype=bool)
     shape = open_cells.shape
     faces = [(open_cells & np.roll(open_cells, -1, a)).astype(float) for a in (0, 1)]
@@ -115,6 +115,10 @@ def flow_factors(gap, axes=(0, 1)):
     Reynolds, Phil. Trans. R. Soc. 177, 157 (1886); Dapp et al., Phys. Rev. Lett. 108, 244301
     (2012); docs/theory.md, section "Interface: stiffness, conductance, leakage".
     """
+    import scipy.sparse as sp
+    from scipy.sparse.csgraph import connected_components
+    from scipy.sparse.linalg import splu
+
     g = np.maximum(np.asarray(gap, dtype=float), 0.0)
     shape = g.shape
     scale = float(g.max()) if g.size and g.max() > 0 else 1.0

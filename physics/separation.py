@@ -27,9 +27,10 @@ from __future__ import annotations
 import functools
 
 import numpy as np
-from scipy.special import erf, erfcx, exp1
 
+from .inputs import require_pressure
 from .quadrature import cumulative_integral, gauss_legendre_panels, integral_to, inverse_cumulative_integral
+from .special import erf, erfcx, exp1
 
 #: eps = exp(\\int_0^inf 2x ln x exp(-x^2) dx) = exp(-gamma_Euler / 2) = 0.749306..., seed eq 28.
 EPSILON = float(np.exp(-0.5 * np.euler_gamma))
@@ -39,7 +40,22 @@ REFINEMENTS = {
     "none": "Persson: alpha constant (eq 57)",
     "yang_persson": "Yang & Persson 2008: alpha -> alpha + 3 (1 - alpha) P(q, p')^2 inside the p' integral, "
                     "P = erf(w p'/E*)",
+    "wang_mueser": "elastic-energy factor S = alpha - (2/9) P^2 + (11/9 - alpha) P^4 of Wang & Mueser 2017 (their "
+                   "contact-area correction used in the energy, as Yang-Persson's is): alpha -> alpha - (2/3) P^2 "
+                   "+ 5 (11/9 - alpha) P^4 inside the p' integral",
 }
+
+
+def energy_factor_terms(refinement: str, alpha: float) -> dict[int, float]:
+    """d(P S)/dP = sum_k c_k P^k of the elastic-energy factor S(P) of each refinement:
+    the coefficients {k: c_k} (dimensionless; c_0 = alpha). See :data:`REFINEMENTS`."""
+    if refinement == "none":
+        return {0: alpha}
+    if refinement == "yang_persson":
+        return {0: alpha, 2: 3.0 * (1.0 - alpha)}
+    if refinement == "wang_mueser":
+        return {0: alpha, 2: -2.0 / 3.0, 4: 5.0 * (11.0 / 9.0 - alpha)}
+    raise ValueError(f"unknown refinement {refinement!r}; use one of {', '.join(REFINEMENTS)}")
 
 
 def inverse_w(q, C):
@@ -67,6 +83,34 @@ def inverse_w(q, C):
     """
     q = np.asarray(q, dtype=float)
     return np.sqrt(np.pi * cumulative_integral(q, q**3 * np.asarray(C, dtype=float)))
+
+
+#: Abramowitz & Stegun 5.1.56: x e^x E1(x) = P(x)/Q(x) within 2e-8 for x >= 1 (P, Q monic quartics)
+_E1_P = (8.5733287401, 18.0590169730, 8.6347608925, 0.2677737343)
+_E1_Q = (9.5733223454, 25.6329561486, 21.0996530827, 3.9584969228)
+
+
+def exp1_kernel(x):
+    """E1(x) for x >= 0, 0 from x = 750 on (below 1e-328): scipy's exp1 below 1 and the rational
+    approximation of Abramowitz & Stegun 5.1.56 (relative error < 2e-8) above, where scipy's
+    continued fraction is 3-10 times slower; the separation kernel evaluates E1 at every
+    (pressure, node) pair (and at every spectrum draw of the uncertainty bands).
+
+    References
+    ----------
+    Abramowitz & Stegun, Handbook of Mathematical Functions, eq 5.1.56.
+    """
+    x = np.asarray(x, dtype=float)
+    out = np.zeros_like(x)
+    low = x < 1.0
+    out[low] = exp1(x[low])
+    high = ~low & (x < 750.0)
+    y = x[high]
+    p = (((y + _E1_P[0]) * y + _E1_P[1]) * y + _E1_P[2]) * y + _E1_P[3]
+    q = (((y + _E1_Q[0]) * y + _E1_Q[1]) * y + _E1_Q[2]) * y + _E1_Q[3]
+    with np.errstate(under="ignore"):
+        out[high] = np.exp(-y) / y * p / q
+    return out
 
 
 def e1_integral(s, a):
@@ -106,54 +150,61 @@ def e1_integral(s, a):
     return np.where(small, np.inf, np.where((s > 0) & (z <= 6.0), value, 0.0))
 
 
-@functools.lru_cache(maxsize=1)
-def _yang_persson_table():
-    """Nodes x_k and J(x_k) of J(x0) = \\int_{x0}^inf erf(x)^2 exp(-x^2) dx / x (tabulated once)."""
+@functools.lru_cache(maxsize=4)
+def _power_table(k: int):
+    """Nodes x_i and J_k(x_i) of J_k(x0) = \\int_{x0}^inf erf(x)^k exp(-x^2) dx / x (tabulated once)."""
     x = np.concatenate([[0.0], np.geomspace(1e-3, 7.0, 400)])
     nodes, weights = gauss_legendre_panels(x, 10)
-    f = _yp_integrand(nodes) * weights
+    f = _power_integrand(nodes, k) * weights
     pieces = f.reshape(x.size - 1, 10).sum(-1)
-    # J(7) = \int_7^inf ... < exp(-49)/98 ~ 5e-24: taken as 0
+    # J_k(7) <= \int_7^inf ... < exp(-49)/98 ~ 5e-24: taken as 0
     J = np.concatenate([np.cumsum(pieces[::-1])[::-1], [0.0]])
     return x, J
 
 
-def _yp_integrand(x):
+def _power_integrand(x, k):
     with np.errstate(divide="ignore", invalid="ignore", under="ignore"):
-        return np.where(x > 0, erf(x) ** 2 * np.exp(-x * x) / np.where(x > 0, x, 1.0), 0.0)
+        return np.where(x > 0, erf(x) ** k * np.exp(-x * x) / np.where(x > 0, x, 1.0), 0.0)
 
 
-def yang_persson_J(x0):
-    """The extra term of the Yang-Persson refinement of eq 57 (dimensionless).
+def power_J(x0, k: int = 2):
+    """The terms P^k of a refinement of eq 57 (dimensionless), k >= 1.
 
-    .. math:: J(x_0) = \\int_{x_0}^{\\infty} \\mathrm{erf}(x)^2\\, e^{-x^2}\\, \\frac{dx}{x}
+    .. math:: J_k(x_0) = \\int_{x_0}^{\\infty} \\mathrm{erf}(x)^k\\, e^{-x^2}\\, \\frac{dx}{x}
 
-    With x = w p'/E*, the p' integral of eq 57 with alpha -> alpha + 3 (1 - alpha) erf(x)^2
-    becomes (alpha/2) E1(x0^2) + 3 (1 - alpha) J(x0). J(0) = 0.40712493... Evaluated as a
-    tabulated value at the next table node plus a 10-point Gauss-Legendre integral from
-    ``x0`` to that node (accurate to ~1e-15).
+    With x = w p'/E*, the p' integral of eq 57 with alpha -> sum_k c_k erf(x)^k
+    (:func:`energy_factor_terms`) becomes (c_0/2) E1(x0^2) + sum_{k>0} c_k J_k(x0).
+    J_2(0) = 0.40712493... Evaluated as a tabulated value at the next table node plus a
+    10-point Gauss-Legendre integral from ``x0`` to that node (accurate to ~1e-15).
 
     Parameters
     ----------
     x0 : array
         Lower limit w p / E* (dimensionless), >= 0.
+    k : int
+        Power of erf.
 
     Returns
     -------
     array
-        J(x0), shape of ``x0``.
+        J_k(x0), shape of ``x0``.
 
     References
     ----------
     docs/theory.md, section "Separation"; Yang & Persson, J. Phys.: Condens. Matter 20, 215214 (2008).
     """
     x0 = np.asarray(x0, dtype=float)
-    xt, Jt = _yang_persson_table()
-    k = np.clip(np.searchsorted(xt, x0, side="right"), 1, xt.size - 1)
-    top = xt[k]
+    xt, Jt = _power_table(int(k))
+    i = np.clip(np.searchsorted(xt, x0, side="right"), 1, xt.size - 1)
+    top = xt[i]
     nodes, weights = gauss_legendre_panels(np.stack([np.minimum(x0, top), top], axis=-1), 10)
-    local = (_yp_integrand(nodes) * weights).sum(-1)
-    return np.where(x0 >= xt[-1], 0.0, Jt[k] + local)
+    local = (_power_integrand(nodes, int(k)) * weights).sum(-1)
+    return np.where(x0 >= xt[-1], 0.0, Jt[i] + local)
+
+
+def yang_persson_J(x0):
+    """J(x0) = J_2(x0) of the Yang-Persson refinement (:func:`power_J` with k = 2)."""
+    return power_J(x0, 2)
 
 
 def _limits_on_grid(q, q_upper):
@@ -256,9 +307,15 @@ def separation_nodes(q, C, q_upper, panels_per_decade=4, order=4, depth=10.0):
 
 def _cumulative_at(values, count):
     """sum(values[..., :count_j]) for each j: values (..., K), count (..., m)."""
-    cum = np.concatenate([np.zeros(values.shape[:-1] + (1,)), np.cumsum(values, axis=-1)], axis=-1)
+    cum = np.cumsum(values, axis=-1)
     count = np.broadcast_to(count, values.shape[:-1] + count.shape[-1:])
-    return np.take_along_axis(cum, count, -1)
+    return np.where(count > 0, np.take_along_axis(cum, np.maximum(count - 1, 0), -1), 0.0)
+
+
+def node_sum(values, count):
+    """sum(values[..., :count_j]) for each upper limit j: a quantity on the nodes of
+    :func:`separation_nodes` (..., K) summed up to each magnification (count (..., m))."""
+    return _cumulative_at(values, count)
 
 
 def separation_moments(s, weight, count, s_tail, q_tail):
@@ -298,9 +355,9 @@ def small_pressure_law(M0, M1, alpha, refinement="none"):
               {\\int q^2 C w\\, dq}\\Big) = \\epsilon\\, e^{M_1 / M_0}
 
     with eps = exp(-gamma_Euler/2) (eq 28). The seed prints eq 60 without the minus sign in
-    the exponent; it is restored here. With the Yang-Persson refinement the constant
-    3 (1 - alpha) J(0) of the extra term adds 3 (1 - alpha) J(0) / alpha to the exponent
-    (u0 is unchanged). beta is NaN where M0 = 0 (combined PSD identically zero: no
+    the exponent; it is restored here. With a refinement the constants sum_k c_k J_k(0) of
+    the extra terms add sum_k c_k J_k(0) / alpha to the exponent (Yang-Persson:
+    3 (1 - alpha) J_2(0) / alpha; u0 is unchanged). beta is NaN where M0 = 0 (combined PSD identically zero: no
     roughness, u = 0).
 
     Parameters
@@ -309,8 +366,8 @@ def small_pressure_law(M0, M1, alpha, refinement="none"):
         From :func:`separation_moments` (m).
     alpha : float
         Persson's gamma in eq 57, 0 < alpha <= 1.
-    refinement : {"none", "yang_persson"}
-        See :data:`REFINEMENTS`.
+    refinement : {"none", "yang_persson", "wang_mueser"}
+        See :data:`REFINEMENTS` and :func:`energy_factor_terms`.
 
     Returns
     -------
@@ -324,7 +381,8 @@ def small_pressure_law(M0, M1, alpha, refinement="none"):
     docs/theory.md, section "Separation"; Persson, J. Chem. Phys. 115, 3840 (2001).
     """
     u0 = 2.0 * alpha / np.sqrt(np.pi) * M0
-    shift = 3.0 * (1.0 - alpha) * float(yang_persson_J(0.0)) / alpha if refinement == "yang_persson" else 0.0
+    terms = energy_factor_terms(refinement, alpha)
+    shift = sum(c * float(power_J(0.0, k)) for k, c in terms.items() if k) / alpha
     with np.errstate(divide="ignore", invalid="ignore"):
         beta = np.where(M0 > 0, EPSILON * np.exp(M1 / np.where(M0 > 0, M0, 1.0) + shift), np.nan)
     return u0, beta
@@ -338,8 +396,8 @@ def mean_separation(p, s, weight, count, s_tail, q_tail, *, E_star, alpha, refin
               = \\frac{\\alpha}{\\sqrt{\\pi}} \\int_0^{1/w(\\zeta q_L)} E_1\\big((p / (E^* s))^2\\big)
               \\frac{ds}{q(s)}
 
-    Yang-Persson: (alpha/2) E1(x0^2) -> (alpha/2) E1(x0^2) + 3 (1 - alpha) J(x0), x0 = w p / E*
-    (:func:`yang_persson_J`).
+    Refinements: (alpha/2) E1(x0^2) -> (alpha/2) E1(x0^2) + sum_k c_k J_k(x0), x0 = w p / E*
+    (:func:`energy_factor_terms`, :func:`power_J`; Yang-Persson: c_2 = 3 (1 - alpha)).
 
     Parameters
     ----------
@@ -351,8 +409,8 @@ def mean_separation(p, s, weight, count, s_tail, q_tail, *, E_star, alpha, refin
         Effective modulus (Pa).
     alpha : float
         Persson's gamma, 0 < alpha <= 1.
-    refinement : {"none", "yang_persson"}
-        See :data:`REFINEMENTS`.
+    refinement : {"none", "yang_persson", "wang_mueser"}
+        See :data:`REFINEMENTS` and :func:`energy_factor_terms`.
 
     Returns
     -------
@@ -364,68 +422,22 @@ def mean_separation(p, s, weight, count, s_tail, q_tail, *, E_star, alpha, refin
     docs/theory.md, section "Separation"; Persson, J. Chem. Phys. 115, 3840 (2001); Yang & Persson,
     J. Phys.: Condens. Matter 20, 215214 (2008).
     """
-    a = np.asarray(p, dtype=float)[..., None] / E_star
+    a = require_pressure(p, positive=True)[..., None] / E_star
     with np.errstate(divide="ignore", over="ignore", under="ignore"):
-        z = np.where(s > 0, a / np.where(s > 0, s, 1.0), np.inf)
-        x = z * z
-        kernel = np.where(x < 750.0, exp1(np.minimum(x, 750.0)), 0.0)
-    body = _cumulative_at(weight * kernel, count)
+        z = a * np.where(s > 0, 1.0 / np.where(s > 0, s, 1.0), np.inf)
+        kernel = exp1_kernel(z * z)
+    kernel *= weight
+    body = _cumulative_at(kernel, count)
     tail = e1_integral(s_tail, a)
     u = alpha / np.sqrt(np.pi) * (body + tail / q_tail[..., None])
-    if refinement == "yang_persson":
+    for k, c in energy_factor_terms(refinement, alpha).items():
+        if k == 0:
+            continue
         with np.errstate(divide="ignore", invalid="ignore"):
             zt = np.where(s_tail > 0, a / np.where(s_tail > 0, s_tail, 1.0), np.inf)
-        # on [0, s_tail] J(a/s) rises from 0 to J(a/s_tail): midpoint of the bounds, error
-        # <= s_tail J(0) / 2 (s_tail <= 10^-depth of the s range)
-        extra = _cumulative_at(weight * yang_persson_J(z), count) + 0.5 * s_tail * yang_persson_J(zt) / q_tail[..., None]
-        u = u + 6.0 * (1.0 - alpha) / np.sqrt(np.pi) * extra
+        # on [0, s_tail] J_k(a/s) rises from 0 to J_k(a/s_tail): midpoint of the bounds, error
+        # <= s_tail J_k(0) / 2 (s_tail <= 10^-depth of the s range)
+        extra = _cumulative_at(weight * power_J(z, k), count) + 0.5 * s_tail * power_J(zt, k) / q_tail[..., None]
+        u = u + 2.0 * c / np.sqrt(np.pi) * extra
     return u
 
-
-def gaussian_integral(s, a):
-    """F1(s) = \\int_0^s exp(-a^2 / s'^2) ds' in closed form (units of ``s``), 0 where a/s > 6.
-
-    .. math:: F_1(s) = s\\, e^{-z^2} \\big(1 - \\sqrt{\\pi}\\, z\\, \\mathrm{erfcx}(z)\\big), \\qquad z = a/s
-
-    (= s exp(-z^2) - sqrt(pi) a erfc(z)): the tail of :func:`separation_log_slope`, where q(s) is
-    constant. ``s`` >= 0 (dimensionless, like 1/w), ``a`` = p/E* >= 0, broadcast. See docs/theory.md,
-    section "Interface: stiffness, conductance, leakage".
-    """
-    s, a = np.broadcast_arrays(np.asarray(s, dtype=float), np.asarray(a, dtype=float))
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore", under="ignore"):
-        z = a / s
-        value = s * np.exp(-z * z) * (1.0 - np.sqrt(np.pi) * z * erfcx(z))
-    return np.where((s > 0) & (z <= 6.0), value, 0.0)
-
-
-def separation_log_slope(p, s, weight, count, s_tail, q_tail, *, E_star, alpha, refinement="none"):
-    """D(p) = -du/d(ln p) (m), eq 57 differentiated analytically: the contact stiffness is K = p / D.
-
-    With d E1(x^2)/dp = -2 exp(-x^2)/p (x = w p/E*), on the nodes of :func:`mean_separation`:
-
-    .. math:: D = \\sqrt{\\pi}\\, \\alpha \\int_{q_L}^{\\zeta q_L} q^2 C w\\, e^{-(w p/E^*)^2} dq
-              = \\frac{2 \\alpha}{\\sqrt{\\pi}} \\int_0^{1/w(\\zeta q_L)} e^{-(p/(E^* s))^2} \\frac{ds}{q(s)}
-
-    tail [0, s_tail] in closed form (:func:`gaussian_integral`). Yang-Persson: alpha -> alpha +
-    3 (1 - alpha) erf(x)^2 under the integral (d/dp of 3 (1 - alpha) J(x)); on the tail the midpoint of
-    erf^2's bounds erf(a/s_tail)^2 and 1 (error below s_tail / S). D -> u0 as p -> 0 (seed eq 59).
-
-    Parameters: ``p`` (Pa, > 0, broadcast against the nodes' leading dims); the nodes of
-    :func:`separation_nodes`; ``E_star`` (Pa); ``alpha`` (0 < alpha <= 1); ``refinement``
-    (:data:`REFINEMENTS`). Returns D (m), shape (..., m): one value per upper limit zeta qL; 0
-    where the combined PSD vanishes. References: docs/theory.md, section "Interface: stiffness,
-    conductance, leakage"; Persson, Phys. Rev. Lett. 99, 125502 (2007); Yang & Persson, J. Phys.:
-    Condens. Matter 20, 215214 (2008).
-    """
-    a = np.asarray(p, dtype=float)[..., None] / E_star
-    with np.errstate(divide="ignore", over="ignore", under="ignore", invalid="ignore"):
-        z = np.where(s > 0, a / np.where(s > 0, s, 1.0), np.inf)
-        zt = np.where(s_tail > 0, a / np.where(s_tail > 0, s_tail, 1.0), np.inf)
-    gauss = np.exp(-np.minimum(z * z, 800.0))
-    tail = gaussian_integral(s_tail, a) / q_tail[..., None]
-    if refinement == "yang_persson":
-        gauss = gauss * (alpha + 3.0 * (1.0 - alpha) * erf(z) ** 2)
-        tail = tail * (alpha + 1.5 * (1.0 - alpha) * (1.0 + erf(zt) ** 2))
-    else:
-        gauss, tail = alpha * gauss, alpha * tail
-    return 2.0 / np.sqrt(np.pi) * (_cumulative_at(weight * gauss, count) + tail)

@@ -19,6 +19,7 @@ import numpy as np
 import xarray as xr
 
 from . import __version__, engine, scene as scenes, store
+from .progress import SILENT, Reporter
 from .scene import PRESETS, Scene
 from .stage import Stage, sections
 
@@ -81,7 +82,7 @@ def _interp(da: xr.DataArray, dim: str, target: xr.DataArray) -> xr.DataArray:
     return da.interp({dim: target.values})
 
 
-def measure_stage(scene: Scene, st: Stage, workdir: Path) -> dict:
+def measure_stage(scene: Scene, st: Stage, workdir: Path, report: Reporter = SILENT) -> dict:
     needed = engine.needed_stages(scene, st.main_outputs)
     params = resolution_params(needed)
     rungs = max((len(p.ladder) for p in params.values()), default=0)
@@ -98,15 +99,22 @@ def measure_stage(scene: Scene, st: Stage, workdir: Path) -> dict:
             best = min(best, time.perf_counter() - t0)
         return res["base"][st.name], best
 
+    tick = report.bar(f"accuracy of {st.name}: warm-up, rungs and presets", total=1 + rungs + len(PRESETS), unit="run")
     timed(scene, "warm-up", repeat=1)
+    tick()
     settings = [{k: p.ladder[min(i, len(p.ladder) - 1)] for k, p in params.items()} for i in range(rungs)]
-    runs = [timed(_with(scene, s), f"rung{i}") for i, s in enumerate(settings)]
+    runs = []
+    for i, s in enumerate(settings):
+        runs.append(timed(_with(scene, s), f"rung{i}"))
+        tick()
     reference = runs[-1][0]
     errors = [relative_error(r, reference, st.main_outputs) for r, _ in runs[:-1]]
     presets = {}
     for name in PRESETS:
         res, seconds = timed(_with(scene, {}, name), name)
         presets[name] = (relative_error(res, reference, st.main_outputs), seconds)
+        tick()
+    report.finish()
     return {
         "settings": settings,
         "errors": errors + [0.0],
@@ -116,8 +124,10 @@ def measure_stage(scene: Scene, st: Stage, workdir: Path) -> dict:
     }
 
 
-def measure(scene: Scene, outdir: Path, report=print) -> xr.Dataset:
-    """Measure every stage of the scene that declares main outputs; write NetCDF + PNG."""
+def measure(scene: Scene, outdir: Path, report: Reporter | None = None) -> xr.Dataset:
+    """Measure every stage of the scene that declares main outputs; write NetCDF + PNG. Progress
+    and the table go to ``report`` (default: a :class:`~roughcontact.progress.Reporter` on stderr)."""
+    report = report if report is not None else Reporter()
     all_stages = engine.needed_stages(scene, scene.outputs)
     measured = {}
     with tempfile.TemporaryDirectory() as tmp:
@@ -125,7 +135,7 @@ def measure(scene: Scene, outdir: Path, report=print) -> xr.Dataset:
             if not st.main_outputs:
                 continue
             report(f"accuracy: {st.name} ...")
-            m = measure_stage(scene, st, Path(tmp))
+            m = measure_stage(scene, st, Path(tmp), report)
             if m:
                 measured[st.name] = m
                 for name, (err, secs) in m["presets"].items():

@@ -12,7 +12,7 @@ import traceback
 from pathlib import Path
 
 from . import __version__, engine, scene as scenes, store
-from .errors import ComputationError, UserError
+from .errors import ComputationError, OutputError, UserError
 from .stage import stages
 
 
@@ -31,10 +31,13 @@ def _parser() -> argparse.ArgumentParser:
 
     run = scene_command("run", "compute what the scene asks for, reusing up-to-date results")
     run.add_argument("--force", action="append", default=[], metavar="STAGE", help="recompute STAGE even if fresh ('all': every stage)")
-    run.add_argument("--quiet", action="store_true", help="no progress messages")
+    run.add_argument("--quiet", action="store_true", help="no progress bars: one line per stage")
     run.add_argument("--scheduler", help="threads (default), processes, synchronous, or a dask.distributed "
                                          "scheduler address tcp://host:port (overrides [run] scheduler)")
-    scene_command("plan", "say for each stage whether it is fresh, stale (and why) or missing; exit 1 if anything would run")
+    plan = scene_command("plan", "say for each stage whether it is fresh, stale (and why) or missing; exit 1 if anything would run")
+    for p in (run, plan):
+        p.add_argument("--verify", action="store_true", default=None,
+                       help="check the checksum of every reused result (default: of results up to 64 MiB)")
     plot = scene_command("plot", "draw the figures of the scene's stages as PNG (computing what is missing)")
     plot.add_argument("--quiet", action="store_true")
     plot.add_argument("--scheduler", help="as for run")
@@ -53,7 +56,7 @@ def main(argv: list[str] | None = None) -> int:
         return _dispatch(args)
     except UserError as exc:
         print(f"roughcontact: error: {exc.format()}", file=sys.stderr)
-        return 2
+        return exc.exit_code
     except ComputationError as exc:
         print(f"roughcontact: computation failed: {exc}", file=sys.stderr)
         return 1
@@ -88,14 +91,15 @@ def _dispatch(args) -> int:
 def _scene_command(args, sc) -> int:
     outdir = args.outdir or engine.default_outdir(sc)
     if args.command == "plan":
-        plans = engine.plan(sc, outdir)
+        plans = engine.plan(sc, outdir, verify=args.verify)
         for p in plans:
             why = f" ({'; '.join(p.reasons)})" if p.reasons else ""
             print(f"{p.label:28s} {p.status}{why}  {p.path}")
         return 1 if any(p.status != "fresh" for p in plans) else 0
-    reporter = engine.Reporter(None if getattr(args, "quiet", False) else sys.stderr)
+    reporter = engine.Reporter(sys.stderr, bars=False if getattr(args, "quiet", False) else None)
     if args.command == "run":
-        engine.run(sc, outdir, force=args.force, report=reporter, scheduler=args.scheduler)
+        engine.run(sc, outdir, force=args.force, report=reporter, scheduler=args.scheduler, verify=args.verify,
+                   open_results=False)
         print(f"results in {outdir}")
         return 0
     if args.command == "plot":
@@ -103,7 +107,7 @@ def _scene_command(args, sc) -> int:
     if args.command == "accuracy":
         from .accuracy import measure
 
-        measure(sc, outdir / "accuracy")
+        measure(sc, outdir / "accuracy", report=reporter)
         print(f"accuracy table and plot in {outdir / 'accuracy'}")
         return 0
     raise AssertionError(args.command)
@@ -129,9 +133,15 @@ def _plot(sc, outdir: Path, reporter, scheduler=None) -> int:
         fig = f.make(results)
         target = folder / f"{f.name}.png"
         tmp = folder / f"{store.TMP_PREFIX}{f.name}.png"
-        fig.savefig(tmp, dpi=130)
-        plt.close(fig)
-        tmp.replace(target)
+        try:
+            fig.savefig(tmp, dpi=130)
+            tmp.replace(target)
+        except OSError as exc:  # a full disk, say: name the figure, keep nothing of it
+            tmp.unlink(missing_ok=True)
+            raise OutputError(f"cannot write this figure ({exc.strerror or exc}); nothing of it was kept",
+                              file=str(target)) from None
+        finally:
+            plt.close(fig)
         print(f"{f.title}: {target}")
     return 0
 

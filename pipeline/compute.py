@@ -15,16 +15,14 @@ from __future__ import annotations
 import contextlib
 import itertools
 import math
-import sys
-import time
 from typing import Iterator, Mapping
 
-import dask
-import netCDF4
 import numpy as np
 import xarray as xr
 
+from . import ncio
 from .errors import UserError
+from .progress import Tick
 
 
 def auto_chunks(sizes: Mapping[str, int], budget_points: int, explicit: Mapping[str, int] | None = None) -> dict[str, int]:
@@ -40,6 +38,17 @@ def auto_chunks(sizes: Mapping[str, int], budget_points: int, explicit: Mapping[
             break
         chunks[d] = math.ceil(chunks[d] / 2)
     return {d: c for d, c in chunks.items() if c < sizes[d]}
+
+
+def chunk_sweeps(upstream: Mapping[str, xr.Dataset], chunks: Mapping[str, int]) -> dict[str, xr.Dataset]:
+    """Upstream results chunked along the sweep dimensions a stage chunks (``chunks``, from
+    :func:`auto_chunks`): a sweep dimension made upstream (eta, spectrum draws) then splits the
+    stage's work into blocks like the stage's own sweeps. Chunking never changes values."""
+    out = {}
+    for name, ds in upstream.items():
+        dims = {d: int(c) for d, c in chunks.items() if d in ds.dims and c}
+        out[name] = ds.chunk(dims) if dims else ds
+    return out
 
 
 @contextlib.contextmanager
@@ -92,55 +101,36 @@ def _check_workers(client, address: str) -> None:
                         key="run.scheduler")
 
 
-class Progress:
-    """A one-line text progress bar on a stream (blocks written / total)."""
-
-    def __init__(self, total: int, label: str, stream=sys.stderr, width: int = 30):
-        self.total, self.label, self.stream, self.width = total, label, stream, width
-        self.done = 0
-        self.t0 = time.perf_counter()
-        self._last = 0.0
-
-    def advance(self, n: int = 1) -> None:
-        self.done += n
-        now = time.perf_counter()
-        if self.stream is None or (now - self._last < 0.2 and self.done < self.total):
-            return
-        self._last = now
-        filled = int(self.width * self.done / max(self.total, 1))
-        self.stream.write(f"\r    {self.label} [{'#' * filled}{'.' * (self.width - filled)}] "
-                          f"{self.done}/{self.total} blocks {now - self.t0:6.1f} s")
-        if self.done >= self.total:
-            self.stream.write("\n")
-        self.stream.flush()
-
-
 def dask_variables(ds: xr.Dataset) -> list[str]:
     return [name for name, v in ds.variables.items() if v.chunks is not None]
 
 
-def write_blocks(path, ds: xr.Dataset, names: list[str], compute_with, progress_stream=sys.stderr,
-                 in_flight: int | None = None) -> None:
+def write_blocks(path, ds: xr.Dataset, names: list[str], compute_with, progress=None,
+                 in_flight: int | None = None, checksums=None) -> None:
     """Compute the dask variables ``names`` of ``ds`` block by block and write them into the
-    existing NetCDF file ``path`` (whose other variables are already written).
+    existing NetCDF file ``path`` (whose other variables are already written); ``progress`` (a
+    :class:`roughcontact.progress.Reporter`) shows the blocks written.
 
     Variables with the same dimensions and chunks are computed together, so that work they share
     (an integral over q, say) is done once per block.
     """
+    import dask  # imported here: a run with nothing to compute never needs it
+
     groups: dict[tuple, list[str]] = {}
     for name in names:
         var = ds[name].variable
         groups.setdefault((var.dims, var.chunks), []).append(name)
     total = sum(math.prod(len(c) for c in chunks) for (_, chunks) in groups)
-    bar = Progress(total, "writing", progress_stream)
+    bar = progress.bar("writing", total, unit="block") if progress is not None else Tick()
     client = compute_with if not isinstance(compute_with, str) else None
     if in_flight is None:
         workers = len(client.scheduler_info()["workers"]) if client is not None else (dask.system.CPU_COUNT or 2)
         in_flight = max(2, 2 * workers)
-    with netCDF4.Dataset(path, "a") as nc:
+    with ncio.dataset(path, "a") as nc:  # every call into netCDF/HDF5 under the process-wide lock (ncio)
         for (dims, chunks), group in groups.items():
             offsets = [np.concatenate([[0], np.cumsum(c)]) for c in chunks]
-            targets = [nc.variables[name] for name in group]
+            with ncio.locked():
+                targets = [nc.variables[name] for name in group]
             arrays = [ds[name].data for name in group]
             indices = itertools.product(*(range(len(c)) for c in chunks))
 
@@ -159,6 +149,10 @@ def write_blocks(path, ds: xr.Dataset, names: list[str], compute_with, progress_
                     results = dask.compute(*tasks, scheduler=compute_with)
                 for idx, values in zip(batch, results):
                     sl = region(idx)
-                    for target, value in zip(targets, values):
-                        target[sl] = np.asarray(value)
-                    bar.advance()
+                    with ncio.locked():
+                        for target, value in zip(targets, values):
+                            target[sl] = np.asarray(value)
+                    if checksums is not None:
+                        for name, value in zip(group, values):
+                            checksums.add(name, np.asarray(value), [s.start for s in sl])
+                    bar()

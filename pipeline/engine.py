@@ -7,17 +7,17 @@ existing result, and computes only what is missing or stale, upstream first.
 
 from __future__ import annotations
 
-import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Iterable, TextIO
+from typing import Iterable
 
 import xarray as xr
 
-from . import store
+from . import integrity, preflight, reuse, store
 from .errors import UserError
-from .readers import READERS
+from .progress import Reporter
+from .results import StageResults
 from .schema import MISSING
 from .scene import Scene
 from .stage import Stage, StageInput, coords, producer_of, stages
@@ -39,6 +39,9 @@ class StagePlan:
     file_paths: dict = field(default_factory=dict)
     inputs: list[dict] = field(default_factory=list)
     scene_label: str = ""
+    #: an identical result (same key) to put in place instead of computing: a kept result of
+    #: the output folder or the result of an earlier stage of the run (see roughcontact.reuse)
+    source: Path | None = None
 
     @property
     def label(self) -> str:
@@ -75,25 +78,44 @@ def default_outdir(scene: Scene) -> Path:
     return Path("outputs") / scene.name
 
 
-def plan(scene: Scene, outdir: Path, targets: Iterable[str] | None = None, force: Iterable[str] = ()) -> list[StagePlan]:
-    """Plan every needed stage of the scene and of each of its variants."""
+def plan(scene: Scene, outdir: Path, targets: Iterable[str] | None = None, force: Iterable[str] = (),
+         verify: bool | None = None) -> list[StagePlan]:
+    """Plan every needed stage of the scene and of each of its variants.
+
+    A stored result with the right key is fresh if its data still match their checksum
+    (:mod:`roughcontact.integrity`), checked for files up to ``integrity.VERIFY_LIMIT_BYTES``
+    (``verify`` None), for every file (True) or for none (False)."""
+    scene, outdir, targets, force = preflight.arguments(scene, outdir, targets, force)
     targets = tuple(targets) if targets is not None else scene.outputs
-    force = set(force)
     unknown = force - set(stages()) - {"all"}
     if unknown:
         raise UserError(f"--force names unknown stage(s): {', '.join(sorted(unknown))}")
     plans: list[StagePlan] = []
+    earlier: dict[str, Path] = {}  # key -> where the run will have that result
     for variant, sc in (("base", scene), *scene.variants.items()):
         keys: dict[str, str] = {}
         for st in needed_stages(sc, targets):
-            p = _plan_stage(sc, variant, st, outdir, keys, targets, force)
+            p = _plan_stage(sc, variant, st, outdir, keys, targets, force, verify)
             keys[st.name] = p.key
+            if p.status != "fresh" and not force & {st.name, "all"}:
+                _find_identical(p, earlier, outdir)
+            earlier.setdefault(p.key, p.path)
             plans.append(p)
     return plans
 
 
-def _plan_stage(scene, variant, st, outdir, keys, targets, force) -> StagePlan:
-    params = {name: scene.get(name) for name in st.params}
+def _find_identical(p: StagePlan, earlier: dict[str, Path], outdir: Path) -> None:
+    """Where the run can take ``p``'s result from without computing it, said in its reasons."""
+    if p.key in earlier:
+        p.source = earlier[p.key]
+        p.reasons.append(f"identical to {p.source}")
+    elif (kept := reuse.stored(outdir, p.key)) is not None:
+        p.source = kept
+        p.reasons.append("an identical result of an earlier run is kept")
+
+
+def _plan_stage(scene, variant, st, outdir, keys, targets, force, verify=None) -> StagePlan:
+    params = {name: st.section_view(name, scene.get(name)) for name in st.params}
     absent = [name for name, value in params.items() if value is MISSING]
     if absent:
         raise UserError(f"missing required key (stage {st.name} needs it)", key=absent[0])
@@ -104,28 +126,31 @@ def _plan_stage(scene, variant, st, outdir, keys, targets, force) -> StagePlan:
             continue
         if isinstance(value, (list, tuple)):  # a `paths` parameter: several files, read one by one
             file_paths[f.param] = tuple(Path(v) for v in value)
-            inputs += [{"param": f"{f.param}[{i}]", "path": str(v), "sha256": store.file_sha256(Path(v))}
-                       for i, v in enumerate(value)]
+            inputs += [reuse.input_entry(f"{f.param}[{i}]", v, scene.path, f.param) for i, v in enumerate(value)]
             continue
         file_paths[f.param] = Path(value)
-        inputs.append({"param": f.param, "path": str(value), "sha256": store.file_sha256(Path(value))})
+        inputs.append(reuse.input_entry(f.param, value, scene.path, f.param))
     upstream = {up: keys[up] for up in (st.needed(scene.values) if st.needed else st.requires)}
     wanted = frozenset(t for t in targets if t in st.outputs and st.outputs[t].optional)
     record = {
         "stage": st.name,
         "version": st.version,
-        "parameters": params,
+        "parameters": reuse.key_parameters(params),  # file paths out: their hashes are the inputs
         "upstream": upstream,
         "inputs": {i["param"]: i["sha256"] for i in inputs},
         "optional_outputs": sorted(wanted),
     }
     key = store.content_key(record)
+    record["paths"] = {i["param"]: i["path"] for i in inputs}  # for messages only: not part of the key
     path = result_path(outdir, variant, st.name)
+    if path.exists() and not path.is_file():
+        raise UserError(f"is not a file, but the result of stage {st.name} goes there: move it away", file=str(path))
     stored = store.read_attrs(path)
     if stored is None:
         status, reasons = "missing", ["no result yet" if not path.exists() else "existing file is unreadable"]
     elif stored.get("stage_key") == key and st.name not in force and "all" not in force:
-        status, reasons = "fresh", []
+        damage = integrity.damage(path, verify)
+        status, reasons = ("stale", [damage]) if damage else ("fresh", [])
     else:
         status = "stale"
         reasons = _why_stale(stored, record) if stored.get("stage_key") != key else ["forced"]
@@ -164,7 +189,8 @@ def _why_stale(stored: dict, record: dict) -> list[str]:
             reasons.append(f"upstream stage {name} changed")
     for name in sorted(set(old_inputs) | set(record["inputs"])):
         if old_inputs.get(name) != record["inputs"].get(name):
-            reasons.append(f"input file {name} changed (sha256)")
+            shown = record.get("paths", {}).get(name)
+            reasons.append(f"input file {name}{f' ({shown})' if shown else ''} changed (sha256)")
     if sorted(old_optional) != record["optional_outputs"]:
         reasons.append(f"optional outputs {old_optional} -> {record['optional_outputs']}")
     return reasons or ["key differs"]
@@ -207,81 +233,89 @@ def _finish(ds: xr.Dataset, p: StagePlan) -> xr.Dataset:
         attrs.update(stamp)
     extra = dict(ds.attrs)
     ds.attrs = {**extra, **store.provenance_attrs(
-        stage=st.name, version=st.version, key=p.key, parameters=p.params, upstream=p.record["upstream"],
+        stage=st.name, version=st.version, key=p.key, parameters=p.record["parameters"], upstream=p.record["upstream"],
         inputs=p.inputs, optional=list(p.wanted), scene=p.scene_label, variant=p.variant)}
     return ds
 
 
-class Reporter:
-    """Progress messages per stage, on stderr (quiet in tests if asked)."""
-
-    def __init__(self, stream: TextIO | None = sys.stderr):
-        self.stream = stream
-
-    def __call__(self, message: str) -> None:
-        if self.stream is not None:
-            print(message, file=self.stream, flush=True)
-
-
-
 #: results larger than this many bytes are handed downstream lazily (dask-backed), not loaded
-LOAD_LIMIT_BYTES = 256 * 2**20
+LOAD_LIMIT_BYTES = preflight.LOAD_LIMIT_BYTES
 
 
 def run(scene: Scene, outdir: Path, targets: Iterable[str] | None = None, force: Iterable[str] = (),
-        report: Reporter | None = None, scheduler: str | None = None) -> dict[str, dict[str, xr.Dataset]]:
+        report: Reporter | None = None, scheduler: str | None = None,
+        open_results: bool = True, lock_timeout: float | None = None,
+        verify: bool | None = None) -> dict[str, StageResults]:
     """Bring every needed stage up to date; return ``results[variant][stage]``.
+
+    With ``open_results`` every result is opened before this returns (in memory if small, so that
+    it outlives its file); False opens each only when first read (the command line reads none).
 
     ``scheduler`` overrides the scene's ``[run] scheduler`` ('threads', 'processes',
     'synchronous' or a dask.distributed address). Small results are returned in memory, large
-    ones lazily.
+    ones lazily. The run holds the output folder's lock (:mod:`roughcontact.preflight`); another
+    run on the same folder waits for it (at most ``lock_timeout`` seconds, None: until it ends).
+    ``verify``: check the checksums of reused results of every size (see :func:`plan`).
     """
     from .compute import scheduler as open_scheduler
 
+    scene, outdir, targets, force = preflight.arguments(scene, outdir, targets, force)
     report = report or Reporter()
-    with open_scheduler(scheduler or scene.get("run.scheduler")) as compute_with:
-        return _run(scene, outdir, targets, force, report, compute_with)
+    outdir = preflight.output_folder(outdir)
+    with preflight.locked(outdir, report, lock_timeout), open_scheduler(scheduler or scene.get("run.scheduler")) as compute_with:
+        results = _run(scene, outdir, targets, force, report, compute_with, verify)
+    for by_stage in results.values() if open_results else ():
+        by_stage.open_all()
+    return results
 
 
-def _run(scene, outdir, targets, force, report, compute_with):
-    plans = plan(scene, outdir, targets, force)
+def _run(scene, outdir, targets, force, report, compute_with, verify=None):
+    from .compute import chunk_sweeps
+
+    plans = plan(scene, outdir, targets, force, verify)
     scenes = {"base": scene, **scene.variants}
     store.clean_temporaries(outdir)
     for folder in {p.path.parent for p in plans}:
         store.clean_temporaries(folder)
-    results: dict[str, dict[str, xr.Dataset]] = {v: {} for v in scenes}
-    # read every input file and run every validation before anything computes or is written
-    files: dict[int, dict] = {}
-    for i, p in enumerate(plans):
-        if p.status == "fresh":
-            continue
-        files[i] = {param: _read(p.stage, param, path, p.params) for param, path in p.file_paths.items()}
-        if p.stage.validate is not None:
-            p.stage.validate(StageInput(params=p.params, files=files[i], wanted=p.wanted, stage=p.stage.name))
+    results = {v: StageResults(_open) for v in scenes}  # each result opened when first read
+    # read every input file, run every validation and check every size before anything computes or is written
+    files, previews = preflight.validate(plans, scenes, outdir)
     n = len(plans)
     for i, p in enumerate(plans, start=1):
         tag = f"[{i}/{n}] {p.label}"
         if p.status == "fresh":
             report(f"{tag}: up to date ({p.path})")
-            results[p.variant][p.stage.name] = _open(p.path)
+            results[p.variant].add(p.stage.name, p.path)
             continue
-        report(f"{tag}: computing ({'; '.join(p.reasons)})")
+        if p.source is not None:
+            reuse.place(p.source, p.path, outdir)
+            report(f"{tag}: reused, not recomputed ({'; '.join(p.reasons)}) -> {p.path}")
+            results[p.variant].add(p.stage.name, p.path)
+            continue
+        why = "; ".join(p.reasons)
+        report.live(f"{tag}: computing ({why})")
         t0 = time.perf_counter()
         upstream = {up: results[p.variant][up] for up in p.record["upstream"]}
+        chunks = stage_chunks(scenes[p.variant], p.stage, p.params, p.wanted, {**upstream, **_own(previews, p)})
         inp = StageInput(
             params=p.params,
-            upstream=upstream,
+            upstream=chunk_sweeps(upstream, chunks),  # a sweep made upstream (eta, draw) splits this stage's work too
             files=files[i - 1],
             wanted=p.wanted,
-            chunks=stage_chunks(scenes[p.variant], p.stage, p.params, p.wanted, upstream),
+            chunks=chunks,
             stage=p.stage.name,
+            reporter=report,
         )
         with xr.set_options(keep_attrs=False):  # a variable's units come from its declaration, never by inheritance
             computed = p.stage.compute(inp)
         ds = _finish(computed, p)
-        store.write(ds, p.path, compute_with=compute_with, progress_stream=report.stream)
-        results[p.variant][p.stage.name] = _open(p.path)
-        report(f"{tag}: done in {time.perf_counter() - t0:.2f} s -> {p.path}")
+        reuse.retire(p.path, outdir)  # the result it replaces stays reusable under its key
+        store.write(ds, p.path, compute_with=compute_with, progress=report,
+                    compress=scenes[p.variant].get("run.compress"))
+        report.finish()
+        results[p.variant].add(p.stage.name, p.path)
+        report(f"{tag}: computed in {time.perf_counter() - t0:.2f} s ({why}) -> {p.path}")
+    reuse.prune(outdir, [p.path for p in plans])
     return results
 
 
@@ -304,12 +338,12 @@ def _open(path: Path) -> xr.Dataset:
     """A stored result: in memory if small, else opened lazily with the file's own chunking."""
     if path.stat().st_size <= LOAD_LIMIT_BYTES:
         return store.open_result(path)
-    return xr.open_dataset(path, chunks={})
+    from .ncio import open_lazily
+
+    return open_lazily(path)
 
 
-def _read(st: Stage, param: str, path, params):
-    """One loaded file, or a list of them for a ``paths`` parameter."""
-    spec = next(f for f in st.files if f.param == param)
-    reader = READERS[spec.reader]
-    options = dict(spec.options(params)) if spec.options is not None else {}
-    return [reader(p, **options) for p in path] if isinstance(path, tuple) else reader(path, **options)
+def _own(previews, p: StagePlan) -> dict:
+    """The stage's own preview (from its validate hook), for its point_bytes hook."""
+    own = previews.get((p.variant, p.stage.name))
+    return {p.stage.name: own} if own is not None and p.status != "fresh" else {}

@@ -41,3 +41,14 @@ class ComputationError(Exception):
     """A numerical method failed (no convergence, ...). Exit code 1; the message says where."""
 
     exit_code = 1
+
+
+class OutputError(UserError):
+    """A result could not be written (full disk, read-only folder, a folder where a file should
+    be, ...). One line naming the file; the CLI exits 1 (the scene is fine, the machine is not).
+    Raised only after the temporary file is removed: nothing of that result is kept."""
+
+    exit_code = 1
+
+    def located(self, *, file: str | None = None, key: str | None = None) -> "OutputError":
+        return OutputError(self.message, file=self.file or file, key=self.key or key)

@@ -25,7 +25,9 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from .containers import read_container
 from .errors import UserError
+from .ncio import locked
 
 _UNIT_IN_HEADER = re.compile(r"^\s*([^\[\(]*?)\s*[\[\(]\s*([^\]\)]*)\s*[\]\)]\s*$")
 
@@ -44,6 +46,8 @@ class Table:
         1-based line number in the file of each data row.
     names, units
         Column names and units from the header (None where the header gives none).
+    header_line
+        1-based line number of the header (None without one).
     """
 
     path: Path
@@ -51,6 +55,7 @@ class Table:
     lines: np.ndarray
     names: list[str | None] = field(default_factory=list)
     units: list[str | None] = field(default_factory=list)
+    header_line: int | None = None
 
     def column(self, index: int) -> np.ndarray:
         if not 0 <= index < self.data.shape[1]:
@@ -94,6 +99,7 @@ def read_table(path: Path) -> Table:
         raise UserError("not a text file (is it binary or in another encoding?)", file=str(path)) from None
     rows, lines = [], []
     header: str | None = None
+    header_line = None
     ncol = None
     for number, line in enumerate(text.splitlines(), start=1):
         stripped = line.strip()
@@ -102,14 +108,14 @@ def read_table(path: Path) -> Table:
         if stripped.startswith(("#", "%", "//")):
             body = stripped.lstrip("#%/ ").strip()
             if not rows and body and ("[" in body or "(" in body):
-                header = body
+                header, header_line = body, number
             continue
         cells = _split(stripped)
         try:
             values = [float(c) for c in cells]
         except ValueError:
             if not rows and header is None:
-                header = stripped
+                header, header_line = stripped, number
                 continue
             raise UserError(f"not a number in {stripped[:60]!r}", file=str(path), key=f"line {number}") from None
         if ncol is None:
@@ -124,15 +130,16 @@ def read_table(path: Path) -> Table:
         raise UserError("no data rows", file=str(path))
     names, units = _parse_header(header) if header else ([], [])
     if names and len(names) != ncol:
-        names, units = [], []  # a header we cannot align with the columns names nothing
-    return Table(path=path, data=np.array(rows, dtype=float), lines=np.array(lines), names=names, units=units)
+        names, units, header_line = [], [], None  # a header we cannot align with the columns names nothing
+    return Table(path=path, data=np.array(rows, dtype=float), lines=np.array(lines), names=names, units=units,
+                 header_line=header_line)
 
 
 def read_netcdf(path: Path) -> xr.Dataset:
     """Load a NetCDF file fully into memory."""
     path = Path(path)
     try:
-        with xr.open_dataset(path) as ds:
+        with locked(), xr.open_dataset(path) as ds:
             return ds.load()
     except (OSError, ValueError) as exc:
         raise UserError(f"cannot read as NetCDF ({exc.__class__.__name__}: {str(exc)[:120]})", file=str(path)) from None
@@ -140,9 +147,7 @@ def read_netcdf(path: Path) -> xr.Dataset:
 
 def read_auto(path: Path):
     """NetCDF for ``.nc``/``.nc4``/``.netcdf`` files, a text table otherwise."""
-    if Path(path).suffix.lower() in (".nc", ".nc4", ".netcdf", ".cdf"):
-        return read_netcdf(path)
-    return read_table(path)
+    return read_netcdf(path) if Path(path).suffix.lower() in (".nc", ".nc4", ".netcdf", ".cdf") else read_table(path)
 
 
 @dataclass
@@ -334,31 +339,22 @@ def first_bad(bad: np.ndarray, message, path: Path, where) -> None:
 
 
 def read_spectrum(path: Path, *, key: str, convention: str, convention_units: dict, columns=(0, 1),
-                  q_unit: str | None = None, value_unit: str | None = None, variable: str | None = None) -> Spectrum:
-    """Read a measured PSD: a text table (columns ``columns`` = [q, C]) or a NetCDF file with a
-    ``q`` coordinate. Units come from the scene (``q_unit``, ``value_unit``) or else from the
-    file (header ``# q [1/m]  C [m^4]`` or the NetCDF ``units`` attributes). ``key`` is the
-    scene section the file belongs to (errors name ``key.q_unit``, ``key.variable``, ...)."""
-    from .units import array_to_si
+                  q_unit: str | None = None, value_unit: str | None = None, variable: str | None = None,
+                  select: dict | None = None) -> Spectrum:
+    """A measured PSD: a text table (columns [q, C]) or a NetCDF file (:func:`roughcontact.datafiles.netcdf_psd`,
+    ``select``: one slice of a larger variable). Units from the scene (``q_unit``, ``value_unit``) or the file
+    (header ``# q [1/m]  C [m^4]``, NetCDF ``units``), blamed on either; ``key``: the file's scene section."""
+    from .datafiles import column_to_si, netcdf_psd
 
     path = Path(path)
     loaded = read_auto(path)
     attrs: dict = {}
+    origin = {"q": None if q_unit else "file", "C": None if value_unit else "file"}
     if isinstance(loaded, xr.Dataset):
-        if "q" not in loaded.coords and "q" not in loaded.variables:
-            raise UserError("NetCDF file has no 'q' coordinate", file=str(path))
-        if variable is None:
-            candidates = [v for v in loaded.data_vars if loaded[v].dims == ("q",)]
-            if len(candidates) != 1:
-                raise UserError(f"cannot tell which variable is the PSD ({', '.join(candidates) or 'none over q'}); "
-                                f"set {key}.variable", file=str(path))
-            variable = candidates[0]
-        if variable not in loaded:
-            raise UserError(f"no variable {variable!r} in the file", file=str(path), key=f"{key}.variable")
-        q_unit = q_unit or loaded["q"].attrs.get("units")
-        value_unit = value_unit or loaded[variable].attrs.get("units")
-        convention = loaded[variable].attrs.get("psd_convention", convention)
-        q_raw, c_raw = loaded["q"].values, loaded[variable].values
+        q_raw, c_raw, file_q_unit, file_c_unit, psd_var = netcdf_psd(loaded, path, key, variable, select)
+        q_unit, value_unit = q_unit or file_q_unit, value_unit or file_c_unit
+        origin = {k: v and ("q.units" if k == "q" else f"{psd_var.name}.units") for k, v in origin.items()}
+        convention = psd_var.attrs.get("psd_convention", convention)
         where = lambda i: f"index {i}"  # noqa: E731
         attrs["source_provenance"] = json.dumps({k: str(v) for k, v in loaded.attrs.items()})
     else:
@@ -368,13 +364,15 @@ def read_spectrum(path: Path, *, key: str, convention: str, convention_units: di
         q_raw, c_raw = loaded.column(iq), loaded.column(ic)
         q_unit = q_unit or (loaded.units[iq] if loaded.units else None)
         value_unit = value_unit or (loaded.units[ic] if loaded.units else None)
+        origin = {k: v and f"line {loaded.header_line}" for k, v in origin.items()}
         where = lambda i: f"line {loaded.lines[i]}"  # noqa: E731
     if not q_unit or not value_unit:
         raise UserError(
             f"units of the {'q' if not q_unit else 'C'} column unknown: put them in the file's header "
             f"('# q [1/m]  C [m^4]') or set {key}.{'q_unit' if not q_unit else 'C_unit'}", file=str(path))
-    q = array_to_si(q_raw, q_unit, "1/m", key=f"{key}.q_unit")
-    values = array_to_si(c_raw, value_unit, convention_units[convention], key=f"{key}.C_unit")
+    q = column_to_si(q_raw, q_unit, "1/m", path=path, scene_key=f"{key}.q_unit", origin=origin["q"], what="q")
+    values = column_to_si(c_raw, value_unit, convention_units[convention], path=path, scene_key=f"{key}.C_unit",
+                          origin=origin["C"], what="the PSD")
     first_bad(~np.isfinite(q) | ~np.isfinite(values), lambda i: "NaN or infinite value", path, where)
     first_bad(values < 0, lambda i: f"negative PSD value {c_raw[i]:g}", path, where)
     first_bad(q <= 0, lambda i: f"wavenumber must be positive, got {q_raw[i]:g}", path, where)
@@ -408,7 +406,7 @@ def read_master_curve(path: Path, *, key: str = "modulus", columns=(0, 1, 2), fr
     ``modulus_unit``) or else from the header (``# f [Hz]  E' [MPa]  E'' [MPa]``); the frequency
     is angular or cyclic (omega = 2 pi f) as ``frequency`` says ("auto": angular if its unit
     says rad). ``key`` is the scene section (errors name ``key.frequency_unit``, ...)."""
-    from .units import array_to_si
+    from .datafiles import column_to_si
 
     cols = tuple(columns)
     if len(cols) != 3:
@@ -428,13 +426,17 @@ def read_master_curve(path: Path, *, key: str = "modulus", columns=(0, 1, 2), fr
     for raw, name in ((f_raw, "frequency"), (s_raw, "E'"), (l_raw, "tan delta" if tan else "E''")):
         first_bad(~np.isfinite(raw), lambda i: f"{name} is NaN or infinite", table.path, where)
     angular = frequency == "angular" or frequency == "auto" and re.search(r"rad", f_unit) is not None
-    omega = array_to_si(f_raw, f_unit, "1/s", key=f"{key}.frequency_unit") * (1.0 if angular else 2.0 * np.pi)
-    storage = array_to_si(s_raw, e_unit, "Pa", key=f"{key}.modulus_unit")
+    def si(raw, unit, target, name, what):  # a unit from the header is blamed on the header line
+        return column_to_si(raw, unit, target, path=table.path, scene_key=f"{key}.{name}", what=what,
+                            origin=None if {"frequency_unit": frequency_unit, "modulus_unit": modulus_unit}[name]
+                            else f"line {table.header_line}")
+    omega = si(f_raw, f_unit, "1/s", "frequency_unit", "the frequency") * (1.0 if angular else 2.0 * np.pi)
+    storage = si(s_raw, e_unit, "Pa", "modulus_unit", "E'")
     first_bad(omega <= 0, lambda i: f"frequency must be positive, got {f_raw[i]:g}", table.path, where)
     first_bad(np.diff(omega) <= 0, lambda i: f"frequency is not strictly increasing ({f_raw[i]:g} then "
               f"{f_raw[i + 1]:g})", table.path, lambda i: where(i + 1))
     first_bad(storage <= 0, lambda i: f"storage modulus E' must be positive, got {s_raw[i]:g}", table.path, where)
-    loss = storage * l_raw if tan else array_to_si(l_raw, l_unit, "Pa", key=f"{key}.modulus_unit")
+    loss = storage * l_raw if tan else si(l_raw, l_unit, "Pa", "modulus_unit", "E''")
     loss_name = "tan delta" if tan else "loss modulus E''"
     first_bad(l_raw < 0 if tan else loss < 0, lambda i: f"{loss_name} must be >= 0, got {l_raw[i]:g}", table.path, where)
     if omega.size < 2:
@@ -444,5 +446,5 @@ def read_master_curve(path: Path, *, key: str = "modulus", columns=(0, 1, 2), fr
                        attrs={"source_file": str(path), "frequency_column": f"{f_unit} ({kind})"})
 
 
-READERS = {"table": read_table, "netcdf": read_netcdf, "auto": read_auto, "topography": read_topography,
-           "spectrum": read_spectrum, "master_curve": read_master_curve}
+READERS = {"table": read_table, "netcdf": read_netcdf, "auto": read_auto, "topography": read_topography, "spectrum": read_spectrum,
+           "master_curve": read_master_curve, "dma": lambda path, **kw: __import__(f"{__package__}.dma", fromlist=["read_dma"]).read_dma(path, **kw), "container": read_container}

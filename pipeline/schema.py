@@ -27,6 +27,9 @@ class _Missing:
     def __repr__(self) -> str:
         return "<missing>"
 
+    def __reduce__(self):  # one object, also after a round trip through pickle (the scene cache)
+        return "MISSING"
+
 
 MISSING = _Missing()
 
@@ -37,7 +40,8 @@ MISSING = _Missing()
 #:   int, bool, str, choice, path (a file, resolved against the scene's folder)
 #:   paths     one or more files (a string or a list of strings), each resolved like ``path``
 #:   list      a list of strings; intlist: a list of whole numbers
-KINDS = ("quantity", "sweep", "quantities", "int", "bool", "str", "choice", "path", "paths", "list", "intlist")
+#:   table     a table of names to numbers or strings (e.g. { eta = 0.0 })
+KINDS = ("quantity", "sweep", "quantities", "int", "bool", "str", "choice", "path", "paths", "list", "intlist", "table")
 
 
 @dataclass(frozen=True)
@@ -87,6 +91,9 @@ class Param:
     #: the setting's values from coarse to fine for ``roughcontact accuracy``; the last is the
     #: reference ("converged") value
     ladder: tuple = ()
+    #: the quantity is a difference (e.g. WLF's C2, a temperature difference): offset units are read as
+    #: differences ("51.6 degC" is 51.6 K), never as absolute values
+    difference: bool = False
 
     def __post_init__(self):
         if self.kind not in KINDS:
@@ -97,14 +104,16 @@ class Param:
         """Validate and convert ``raw`` (as read from TOML) to its SI value."""
         k = self.kind
         if k == "quantity":
-            return self._bounded(to_si(raw, self.units, key=key), key)
+            return self._bounded(to_si(raw, self.units, key=key, difference=self.difference), key)
         if k in ("sweep", "quantities"):
             if isinstance(raw, str) and raw in self.choices:
                 return raw
-            values = parse_sweep(raw, self.units, key)
+            values = parse_sweep(raw, self.units, key, difference=self.difference)
             for v in np.atleast_1d(values):
                 self._bounded(float(v), key)
-            return values
+            # a sweep becomes a coordinate, which CF wants strictly monotonic: increasing, whatever
+            # order the scene lists it in (results do not depend on the order)
+            return np.sort(values) if k == "sweep" and isinstance(values, np.ndarray) else values
         if k == "int":
             if isinstance(raw, bool) or not isinstance(raw, int):
                 raise UserError(f"expected a whole number, got {raw!r}", key=key)
@@ -131,6 +140,11 @@ class Param:
             for x in raw:
                 self._bounded(x, key)
             return tuple(raw)
+        if k == "table":
+            if not isinstance(raw, dict) or not all(isinstance(v, (int, float, str)) and not isinstance(v, bool)
+                                                    for v in raw.values()):
+                raise UserError(f"expected a table of names to numbers or strings, e.g. {{ eta = 0.0 }}, got {raw!r}", key=key)
+            return dict(raw)
         if k == "paths":
             items = [raw] if isinstance(raw, str) else raw
             if not isinstance(items, list) or not items or not all(isinstance(x, str) for x in items):
@@ -159,7 +173,7 @@ class Param:
         return v
 
 
-def parse_sweep(raw: Any, units: str, key: str):
+def parse_sweep(raw: Any, units: str, key: str, *, difference: bool = False):
     """A sweep value: a quantity (-> float), a list of quantities (-> 1-D array), or a range
     table ``{from = "...", to = "...", num = N, spacing = "log"|"linear"}``; a table with
     ``values = [...]`` and ``unit = "..."`` gives a list of bare numbers in that unit.
@@ -173,15 +187,18 @@ def parse_sweep(raw: Any, units: str, key: str):
         if "values" in raw:
             if set(raw) - {"values", "unit"}:
                 raise UserError("a sweep table has either 'values' or 'from'/'to'/'num', not both", key=key)
-            return parse_sweep_list(raw["values"], units, key, unit)
+            return parse_sweep_list(raw["values"], units, key, unit, difference)
         missing = [k for k in ("from", "to", "num") if k not in raw]
         if missing:
             raise UserError(f"a range needs 'from', 'to' and 'num' (missing {', '.join(missing)})", key=key)
-        lo = to_si(raw["from"], units, key=f"{key}.from", default_unit=unit)
-        hi = to_si(raw["to"], units, key=f"{key}.to", default_unit=unit)
+        lo = to_si(raw["from"], units, key=f"{key}.from", default_unit=unit, difference=difference)
+        hi = to_si(raw["to"], units, key=f"{key}.to", default_unit=unit, difference=difference)
         num = raw["num"]
         if isinstance(num, bool) or not isinstance(num, int) or num < 1:
             raise UserError(f"'num' must be a whole number >= 1, got {num!r}", key=f"{key}.num")
+        from .sizing import check_sweep_length
+
+        check_sweep_length(num, f"{key}.num")
         spacing = raw.get("spacing", "log")
         if spacing == "log":
             if lo <= 0 or hi <= 0:
@@ -191,14 +208,15 @@ def parse_sweep(raw: Any, units: str, key: str):
             return np.linspace(lo, hi, num)
         raise UserError(f"'spacing' must be 'log' or 'linear', got {spacing!r}", key=f"{key}.spacing")
     if isinstance(raw, list):
-        return parse_sweep_list(raw, units, key, None)
-    return to_si(raw, units, key=key)
+        return parse_sweep_list(raw, units, key, None, difference)
+    return to_si(raw, units, key=key, difference=difference)
 
 
-def parse_sweep_list(raw, units, key, unit):
+def parse_sweep_list(raw, units, key, unit, difference=False):
     if not isinstance(raw, list) or not raw:
         raise UserError("expected a non-empty list", key=key)
-    values = np.array([to_si(v, units, key=f"{key}[{i}]", default_unit=unit) for i, v in enumerate(raw)])
+    values = np.array([to_si(v, units, key=f"{key}[{i}]", default_unit=unit, difference=difference)
+                       for i, v in enumerate(raw)])
     if len(np.unique(values)) != len(values):
         raise UserError("a sweep list must not repeat a value", key=key)
     return values

@@ -7,7 +7,7 @@ hashing, caching, I/O, chunking and scheduling; a stage does none of these.
 
 This module is the whole API a stage module uses (with :mod:`roughcontact.physics` for the
 numbers): :class:`Stage`, :class:`Var`, :class:`FileInput`, :class:`Figure`,
-:class:`StageInput`, :class:`Param`, :class:`Section`, :func:`register`,
+:class:`StageInput`, :class:`Preview`, :class:`Param`, :class:`Section`, :func:`register`,
 :func:`register_section`, :func:`register_params`, :func:`register_coords` and the errors.
 
 Metadata has one source. A variable's units and long name are written once, in its
@@ -31,7 +31,8 @@ from .errors import ComputationError, UserError
 from .schema import MISSING, REQUIRED, Param, Section
 
 __all__ = [
-    "ComputationError", "FileInput", "Figure", "MISSING", "Param", "REQUIRED", "Section", "Stage", "StageInput",
+    "ComputationError", "FileInput", "Figure", "MISSING", "Param", "Preview", "REQUIRED", "Section", "SectionKeys",
+    "Stage", "StageInput",
     "UserError", "Var", "coords", "register", "register_coords", "register_params", "register_section",
 ]
 
@@ -117,11 +118,23 @@ class Stage:
     #: parameters, the optional outputs asked for and the upstream results (lazy or small);
     #: the engine sizes chunks with it (default 512)
     point_bytes: Callable[[Mapping[str, Any], frozenset, Mapping[str, xr.Dataset]], int] | None = None
-    #: optional ``validate(StageInput) -> None``: checks that can fail on the user's input (a file's
-    #: contents, a missing optional package) without computing; the engine runs it for every stage
-    #: about to compute, before any of them computes, so a bad input writes nothing at all.
-    #: ``inp.upstream`` is empty there.
-    validate: Callable[["StageInput"], None] | None = None
+    #: optional ``check(StageInput) -> None``: checks of the stage's own scene keys and files alone
+    #: (``inp.upstream`` is empty); the engine runs every stage's check before any stage's validate, so
+    #: that a cause (two maps on different grids) is reported before its consequences downstream
+    check: Callable[["StageInput"], None] | None = None
+    #: optional ``validate(StageInput) -> Preview | None``: every check that can fail on the user's
+    #: input (scene keys, a file's contents, a missing optional package), without computing; the engine
+    #: runs it for every stage about to compute, upstream first, before any of them computes, so a bad
+    #: input writes nothing at all. ``inp.upstream[name]`` is a :class:`Preview` of each upstream
+    #: result (of the stored file when it is fresh, else what the upstream stage's validate returned):
+    #: its dimensions' sizes and coordinate ranges, never data. Return a :class:`Preview` of this
+    #: stage's own result (the dimensions it adds, e.g. the q grid) for the checks and size estimates
+    #: downstream.
+    validate: Callable[["StageInput"], "Preview | None"] | None = None
+    #: optional ``result_bytes(params, wanted, sizes) -> int``: bytes of the stored result given the
+    #: sizes of all its dimensions (sweep dims and the ones the stage adds); default: every output
+    #: variable over every dimension (an upper bound)
+    result_bytes: Callable[[Mapping[str, Any], frozenset, Mapping[str, int]], int] | None = None
     #: the outputs whose error ``roughcontact accuracy`` measures (default: none: not measured)
     main_outputs: tuple[str, ...] = ()
     #: the relative error the default preset must reach on ``main_outputs``
@@ -129,6 +142,86 @@ class Stage:
     #: sweep dimensions the stage's computation couples (e.g. a derivative along ``p``): the
     #: engine never chunks them, whatever the scene's ``[numerics] chunks`` says
     unchunked: tuple[str, ...] = ()
+    #: of a whole section named in ``params`` whose tables have a ``kind`` (``[substrate]``,
+    #: ``[solid]``), the keys the stage reads for each kind: ``{section: {kind: keys, "*": keys}}``
+    #: ("*": every kind not listed; a kind in neither: every key). The stage is handed, and its
+    #: content key covers, only these keys and ``kind`` (e.g. the topography stage reads a
+    #: measured surface's map keys, not its ``extend``, which only the psd stage reads).
+    reads: Mapping[str, Mapping[str, tuple[str, ...]]] = field(default_factory=dict)
+
+    def section_view(self, name: str, value):
+        """What the stage is handed of the scene value ``value`` of its declared key ``name``:
+        the value itself, or, for a section in :attr:`reads`, a :class:`SectionKeys` of the keys
+        the stage reads."""
+        if name not in self.reads or not isinstance(value, Mapping):
+            return value
+        by_kind = self.reads[name]
+        keys = by_kind.get(value.get("kind"), by_kind.get("*"))
+        if keys is None:
+            return value
+        return SectionKeys({k: v for k, v in value.items() if k == "kind" or k in keys},
+                           hidden=frozenset(value) - set(keys) - {"kind"}, where=f"stage {self.name}, [{name}]")
+
+
+class SectionKeys(dict):
+    """The keys of a scene section a stage declared it reads (:attr:`Stage.reads`); reading one
+    it did not declare is an error (a bug in the stage), so a stage's key covers what it reads."""
+
+    def __init__(self, values, hidden=frozenset(), where=""):
+        super().__init__(values)
+        self.hidden, self.where = hidden, where
+
+    def _refuse(self, key):
+        raise KeyError(f"{self.where} reads key {key!r} that it does not declare in its reads (a bug in the stage)")
+
+    def __missing__(self, key):
+        if key in self.hidden:
+            self._refuse(key)
+        raise KeyError(key)
+
+    def get(self, key, default=None):
+        if key in self.hidden:
+            self._refuse(key)
+        return super().get(key, default)
+
+    def __reduce__(self):  # picklable for process and distributed schedulers
+        return (SectionKeys, (dict(self), self.hidden, self.where))
+
+
+@dataclass(frozen=True)
+class Preview:
+    """What a stage's result will look like, known before it computes (no data).
+
+    ``sizes``: dimension -> length; ``ranges``: coordinate or 1-D variable -> (lowest, highest
+    finite value); ``variables``: the data variables it will hold; ``attrs``: global attributes
+    known in advance; ``keys``: the scene key that sets each dimension's size. A stage's ``validate`` hook returns one for its own result; downstream
+    ``validate`` hooks and the size estimates read it as ``inp.upstream[stage]``.
+    """
+
+    sizes: Mapping[str, int] = field(default_factory=dict)
+    ranges: Mapping[str, tuple[float, float]] = field(default_factory=dict)
+    variables: frozenset = frozenset()
+    attrs: Mapping[str, Any] = field(default_factory=dict)
+    #: the scene key that sets the size of each dimension the stage adds (e.g. {"q":
+    #: "numerics.points_per_decade"}), named when a result would be too large for the machine
+    keys: Mapping[str, str] = field(default_factory=dict)
+    #: the values of (small) 1-D coordinates, where known in advance (e.g. the magnifications)
+    coords: Mapping[str, np.ndarray] = field(default_factory=dict)
+
+    @classmethod
+    def of(cls, ds: xr.Dataset, small: int = 10**6) -> "Preview":
+        """The preview of a stored result (its coordinates and small 1-D variables are read)."""
+        ranges, coords = {}, {}
+        for name, var in ds.variables.items():
+            if var.ndim == 1 and var.size <= small and var.dtype.kind in "fiu":
+                values = np.asarray(var.values, dtype=float)
+                finite = values[np.isfinite(values)]
+                if finite.size:
+                    ranges[str(name)] = (float(finite.min()), float(finite.max()))
+                if name in ds.coords and var.dims == (name,):
+                    coords[str(name)] = values
+        return cls(sizes={str(k): int(v) for k, v in ds.sizes.items()}, ranges=ranges,
+                   variables=frozenset(str(v) for v in ds.data_vars), attrs=dict(ds.attrs), coords=coords)
 
 
 @dataclass
@@ -155,6 +248,15 @@ class StageInput:
     wanted: frozenset[str] = frozenset()
     chunks: Mapping[str, int] = field(default_factory=dict)
     stage: str = "?"
+    #: the engine's :class:`roughcontact.progress.Reporter` (None: no progress shown)
+    reporter: Any = None
+
+    def progress(self, what: str, total: int | None = None, unit: str = "step") -> Callable[..., None]:
+        """A callable ``tick(n=1)`` advancing a progress bar of ``what`` (on a terminal; a no-op
+        elsewhere and in worker processes): hand it to a long kernel as its ``progress``."""
+        from .progress import Tick
+
+        return Tick() if self.reporter is None else self.reporter.bar(f"{self.stage}: {what}", total, unit)
 
     def __getitem__(self, key: str):
         try:
@@ -236,7 +338,7 @@ def register_params(section_name: str, *params: Param, doc: str = "") -> None:
             raise ValueError(f"parameter {section_name}.{p.name} registered twice")
         names.add(p.name)
     new = tuple(p for p in params if p not in current.params)
-    _SECTIONS[section_name] = dataclasses.replace(current, params=current.params + new)
+    _SECTIONS[section_name] = dataclasses.replace(current, params=current.params + new, doc=current.doc or doc)
 
 
 def stages() -> dict[str, Stage]:
@@ -312,6 +414,26 @@ def check_declarations(all_stages: Mapping[str, Stage], all_sections: Mapping[st
         for up in st.requires:
             if up not in all_stages:
                 raise ValueError(f"stage {st.name} requires {up!r}, which is not a stage")
+        _check_reads(st, all_sections)
         shared = sorted(set(st.coords) & set(shared_coords))
         if shared:
             raise ValueError(f"stage {st.name} redeclares the shared coordinate(s) {shared}")
+
+
+def _check_reads(st: Stage, all_sections: Mapping[str, Section]) -> None:
+    """Every section in a stage's ``reads`` is one of its whole-section params with kinds, and
+    every key it names exists for that kind."""
+    for name, by_kind in st.reads.items():
+        if name not in st.params or name not in all_sections or not all_sections[name].discriminator:
+            raise ValueError(f"stage {st.name} selects keys of {name!r}, which is not a whole section with kinds "
+                             f"in its params")
+        sec = all_sections[name]
+        for kind, keys in by_kind.items():
+            if kind != "*" and kind not in sec.variants:
+                raise ValueError(f"stage {st.name} reads keys of [{name}] kind {kind!r}, which does not exist")
+            names = {p.name for p in sec.params}
+            names |= {p.name for ps in sec.variants.values() for p in ps} if kind == "*" else {
+                p.name for p in sec.variants[kind]}
+            unknown = sorted(set(keys) - names)
+            if unknown:
+                raise ValueError(f"stage {st.name} reads {unknown} of [{name}] kind {kind!r}: no such key")

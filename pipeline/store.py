@@ -13,6 +13,7 @@ import functools
 import hashlib
 import json
 import os
+import socket
 import subprocess
 import tempfile
 from pathlib import Path
@@ -21,7 +22,8 @@ from typing import Any, Mapping
 import numpy as np
 import xarray as xr
 
-from . import __version__
+from . import __version__, cf, integrity, ncio
+from .errors import OutputError
 
 TMP_PREFIX = ".tmp-"
 
@@ -63,17 +65,37 @@ def file_sha256(path: Path) -> str:
 
 @functools.cache
 def git_commit() -> str:
-    """Commit of the roughcontact source tree, where it is a git checkout ('unknown' otherwise)."""
+    """The commit of the running roughcontact: from git where the package runs from its checkout
+    (an editable install; ``-dirty`` with uncommitted changes), else the one setuptools-scm
+    recorded when the installed package was built."""
     here = Path(__file__).resolve().parent.parent
     try:
-        out = subprocess.run(["git", "-C", str(here), "rev-parse", "HEAD"], capture_output=True, text=True, timeout=5)
-        if out.returncode == 0:
+        top = subprocess.run(["git", "-C", str(here), "rev-parse", "--show-toplevel"], capture_output=True,
+                             text=True, timeout=5)
+        if top.returncode == 0 and Path(top.stdout.strip()).resolve() == here:
+            head = subprocess.run(["git", "-C", str(here), "rev-parse", "HEAD"], capture_output=True, text=True,
+                                  timeout=5).stdout.strip()
             dirty = subprocess.run(["git", "-C", str(here), "status", "--porcelain", "--untracked-files=no"],
                                    capture_output=True, text=True, timeout=5).stdout.strip()
-            return out.stdout.strip() + ("-dirty" if dirty else "")
+            if head:
+                return head + ("-dirty" if dirty else "")
     except (OSError, subprocess.SubprocessError):
         pass
-    return "unknown"
+    return built_commit()
+
+
+def built_commit() -> str:
+    """The commit the installed package was built from, as setuptools-scm recorded it, with
+    ``-dirty`` if the tree had uncommitted changes."""
+    import importlib
+
+    built = importlib.import_module(f"{__package__}._version")  # written at build time, with __version__
+    commit = getattr(built, "commit_id", None)
+    if not commit:
+        return "unknown (built without git metadata)"
+    local = built.__version__.partition("+")[2].split(".")
+    dirty = any(part.startswith("d") and part[1:].isdigit() for part in local)
+    return commit.removeprefix("g") + ("-dirty" if dirty else "")  # git nodes are written g<hash>
 
 
 def utc_now() -> str:
@@ -117,47 +139,89 @@ def _encodable(ds: xr.Dataset) -> xr.Dataset:
     return ds
 
 
-def write(ds: xr.Dataset, path: Path, compute_with="threads", progress_stream=None) -> None:
+def write(ds: xr.Dataset, path: Path, compute_with="threads", progress=None, compress: bool = True) -> None:
     """Write ``ds`` to ``path`` atomically: a temporary file in the same folder, then a rename.
 
     Dask-backed variables are computed block by block by ``compute_with`` (a dask scheduler
     name or a distributed Client) and written from this process (:func:`pipeline.compute.write_blocks`),
-    so a result never has to fit in memory. A crash or kill while writing leaves at most a
+    so a result never has to fit in memory (``progress``: a :class:`roughcontact.progress.Reporter`
+    showing the blocks written; ``compress``: large variables zlib-compressed, :mod:`roughcontact.cf`). A crash or kill while writing leaves at most a
     ``.tmp-*`` file, which is never read as a result (and is removed by :func:`clean_temporaries`).
+    The file gets a checksum of its data and attributes (:mod:`roughcontact.integrity`). A file
+    that cannot be written (full disk, no permission) is an :class:`OutputError` naming it, raised
+    after its temporary is removed.
     """
     from .compute import dask_variables, write_blocks
 
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f"{TMP_PREFIX}{path.name}.", dir=path.parent)
-    os.close(fd)
+    tmp = None
     try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f"{TMP_PREFIX}{path.name}.{_owner()}.", dir=path.parent)
+        os.close(fd)
+        os.chmod(tmp, new_file_mode())  # mkstemp makes it 0600; a result is a file like any other
         ds = _encodable(ds)
         lazy = dask_variables(ds)
-        ds.drop_vars(lazy).to_netcdf(tmp, engine="netcdf4")
+        eager = ds.drop_vars(lazy)
+        with ncio.locked():
+            eager.to_netcdf(tmp, engine="netcdf4", encoding=cf.encoding(eager, compress))
+        sums = integrity.Checksums({name: ds[name].variable.chunks for name in lazy})
         if lazy:
-            _define(tmp, ds, lazy)
-            write_blocks(tmp, ds, lazy, compute_with, progress_stream)
+            _define(tmp, ds, lazy, compress)
+            write_blocks(tmp, ds, lazy, compute_with, progress, checksums=sums)
+        integrity.stamp(tmp, sums.known())
         with open(tmp, "rb+") as fh:
             os.fsync(fh.fileno())
         os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
+    except BaseException as exc:
+        why = _why(exc, path) if _is_write_failure(exc) else None  # the free space before the temporary goes
+        if tmp is not None:
+            Path(tmp).unlink(missing_ok=True)
+        if why is not None:
+            raise OutputError(f"cannot write this result ({why}); nothing of it was kept", file=str(path)) from None
         raise
 
 
-def _define(path, ds: xr.Dataset, names: list[str]) -> None:
+def new_file_mode() -> int:
+    """The permissions the user's umask gives a new file (0644 under umask 022)."""
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return 0o666 & ~mask
+
+
+def _owner() -> str:
+    """Who writes a temporary: host and process id (a temporary of a live process is never removed)."""
+    return f"{socket.gethostname().replace('.', '_')}-{os.getpid()}"
+
+
+def _is_write_failure(exc: BaseException) -> bool:
+    """An OSError, or the netCDF library's error, while writing (not a stage's error)."""
+    return isinstance(exc, OSError) or isinstance(exc, RuntimeError) and str(exc).startswith(("NetCDF:", "HDF"))
+
+
+def _why(exc: BaseException, path: Path) -> str:
+    """The reason, with the free space of the disk when it is (nearly) full."""
+    import shutil
+
+    text = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
+    try:
+        free = shutil.disk_usage(path.parent if path.parent.exists() else Path.cwd()).free
+    except OSError:
+        return text
+    return f"{text}; the disk had {free / 1e6:.3g} MB free when it failed" if free < 2**30 else text
+
+
+def _define(path, ds: xr.Dataset, names: list[str], compress: bool = True) -> None:
     """Declare the lazily computed variables in the file, with their attributes."""
     import netCDF4
 
-    with netCDF4.Dataset(path, "a") as nc:
+    with ncio.locked(), netCDF4.Dataset(path, "a") as nc:
         for name in names:
             var = ds[name].variable
             for dim in var.dims:
                 if dim not in nc.dimensions:
                     nc.createDimension(dim, ds.sizes[dim])
-            fill = np.nan if np.issubdtype(var.dtype, np.floating) else None
-            target = nc.createVariable(name, var.dtype, var.dims, fill_value=fill)
+            target = nc.createVariable(name, var.dtype, var.dims, **cf.lazy_variable(ds, name, compress))
             target.setncatts(dict(var.attrs))
         coords = [n for n in names if n in ds.coords and n not in ds.dims]
         for name in ds.data_vars:
@@ -167,24 +231,41 @@ def _define(path, ds: xr.Dataset, names: list[str]) -> None:
 
 
 def clean_temporaries(folder: Path) -> None:
-    """Remove temporaries that a killed run left behind."""
+    """Remove temporaries that a killed run left behind. Called only while holding the output
+    folder's lock (:func:`roughcontact.preflight.locked`): no other run writes there then, so a
+    temporary is stale, unless its name says that a live process of this host owns it."""
     if folder.is_dir():
         for leftover in folder.glob(f"{TMP_PREFIX}*"):
-            leftover.unlink(missing_ok=True)
+            if not _owner_alive(leftover.name):
+                leftover.unlink(missing_ok=True)
+
+
+def _owner_alive(name: str) -> bool:
+    """Whether the temporary ``name`` belongs to another live process of this host."""
+    host, _, pid = (name.split(".")[-2] if name.count(".") >= 3 else "").rpartition("-")
+    if host != socket.gethostname().replace(".", "_") or not pid.isdigit() or int(pid) == os.getpid():
+        return False
+    try:
+        os.kill(int(pid), 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # alive, another user's
+        return True
+    return True
 
 
 def read_attrs(path: Path) -> dict | None:
     """Global attributes of a stored result, or None if the file is missing or unreadable."""
     if not Path(path).is_file():
         return None
-    try:
-        with xr.open_dataset(path) as ds:
-            return dict(ds.attrs)
+    try:  # with netCDF4 directly: opening with xarray would import dask and pint for nothing
+        with ncio.dataset(path) as nc, ncio.locked():
+            return {k: nc.getncattr(k) for k in nc.ncattrs()}
     except Exception:  # a truncated or foreign file is simply not a valid result
         return None
 
 
 def open_result(path: Path) -> xr.Dataset:
     """Load a stored result fully into memory (the file is closed afterwards)."""
-    with xr.open_dataset(path) as ds:
+    with ncio.locked(), xr.open_dataset(path) as ds:
         return ds.load()

@@ -1,6 +1,8 @@
 """The one unit parser: quantities given as strings ("1 nm", "77.2 GPa", "2e8 1/m") -> SI floats.
 
-Everything inside roughcontact is SI; this module is the only place that talks to pint.
+Everything inside roughcontact is SI; this module is the only place that talks to pint, which
+is imported, and its registry built, only when a quantity is parsed (a rerun whose scene is
+unchanged takes its parsed values from :mod:`roughcontact.scenecache` and never does).
 """
 
 from __future__ import annotations
@@ -9,7 +11,6 @@ import functools
 import re
 
 import numpy as np
-import pint
 
 from .errors import UserError
 
@@ -17,13 +18,18 @@ _NUMBER = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(.*?)\s
 
 
 @functools.cache
-def registry() -> pint.UnitRegistry:
-    ureg = pint.UnitRegistry()
+def registry() -> "pint.UnitRegistry":
+    import pint
+
+    try:  # pint's own on-disk cache of its parsed definitions: a second start builds it in a fraction
+        ureg = pint.UnitRegistry(cache_folder=":auto:")
+    except OSError:  # no writable cache folder
+        ureg = pint.UnitRegistry()
     ureg.define("angstrom_alias = angstrom = Å")
     return ureg
 
 
-def _unit(text: str, key: str | None) -> pint.Unit:
+def _unit(text: str, key: str | None) -> "pint.Unit":
     try:
         return registry().Unit(text)
     except Exception as exc:  # pint raises several types for unparsable units
@@ -34,7 +40,8 @@ def is_dimensionless(units: str) -> bool:
     return units in ("", "1") or _unit(units, None).dimensionless
 
 
-def to_si(value, units: str, *, key: str | None = None, default_unit: str | None = None) -> float:
+def to_si(value, units: str, *, key: str | None = None, default_unit: str | None = None,
+          difference: bool = False) -> float:
     """Convert a scalar quantity to a float in the SI ``units``.
 
     Parameters
@@ -48,12 +55,16 @@ def to_si(value, units: str, *, key: str | None = None, default_unit: str | None
         The scene key, for the error message.
     default_unit
         Unit of a bare number (e.g. from a ``unit =`` entry next to a list).
+    difference
+        The quantity is a difference (e.g. a temperature difference, WLF's C2): offset units
+        are read as their differences ("51.6 degC" is 51.6 K, pint's ``delta_degC``), never
+        as absolute temperatures (324.75 K).
     """
     if isinstance(value, bool):
         raise UserError(f"expected a quantity in {units or 'dimensionless'} units, got {value!r}", key=key)
     if isinstance(value, (int, float, np.number)):
         if default_unit is not None:
-            return _convert(float(value), default_unit, units, key)
+            return _convert(float(value), default_unit, units, key, difference)
         if is_dimensionless(units):
             return float(value)
         raise UserError(
@@ -67,22 +78,36 @@ def to_si(value, units: str, *, key: str | None = None, default_unit: str | None
     number, unit_text = float(m.group(1)), m.group(2)
     if not unit_text:
         if default_unit is not None:
-            return _convert(number, default_unit, units, key)
+            return _convert(number, default_unit, units, key, difference)
         if is_dimensionless(units):
             return number
         raise UserError(
             f"{value!r} has no units; write it with units, e.g. \"{value} {_example_unit(units)}\"", key=key
         )
-    return _convert(number, unit_text, units, key)
+    return _convert(number, unit_text, units, key, difference)
 
 
-def _convert(number: float, unit_text: str, units: str, key: str | None) -> float:
+def _as_difference(unit: pint.Unit) -> pint.Unit:
+    """The unit of a difference: each offset unit (degC, degF) replaced by its delta unit."""
+    from pint.util import UnitsContainer
+
+    ureg = registry()
+    parts = {(name if ureg.Quantity(1.0, name)._is_multiplicative else f"delta_{name}"): exp
+             for name, exp in unit._units.items()}
+    return ureg.Unit(UnitsContainer(parts))
+
+
+def _convert(number: float, unit_text: str, units: str, key: str | None, difference: bool = False) -> float:
     ureg = registry()
     src = _unit(unit_text, key)
+    if difference:
+        src = _as_difference(src)
     dst = _unit(units, key) if units not in ("", "1") else ureg.dimensionless
+    from pint import DimensionalityError
+
     try:
         return float(ureg.Quantity(number, src).to(dst).magnitude)
-    except pint.DimensionalityError:
+    except DimensionalityError:
         raise UserError(
             f"'{number:g} {unit_text}' is not convertible to {units or 'a dimensionless number'}", key=key
         ) from None

@@ -18,7 +18,7 @@ from roughcontact.physics.adhesion import (
 )
 from roughcontact.physics.volterra import solve_partial_contact, vanishing_hrms_from_sweep
 from roughcontact.stage import (
-    ComputationError, Figure, Param, Section, Stage, StageInput, UserError, Var, register, register_params,
+    ComputationError, Figure, Param, Preview, Section, Stage, StageInput, UserError, Var, register, register_params,
     register_section,
 )
 
@@ -92,7 +92,7 @@ def _where(labels, names, bad) -> str:
     return ", ".join(parts) or "the only case"
 
 
-def _partial_kernel(C, c0, c1, *labels, q, E_star, delta_gamma, sigma0, zeta, K_min, tol, names):
+def _partial_kernel(C, c0, c1, *labels, q, E_star, delta_gamma, sigma0, zeta, K_min, tol, names, progress=None):
     """apply_ufunc kernel: the partial-contact solution for every case of the sweep, in SI
     (gamma_eff(1), P(zeta), gamma_eff(zeta), sigma_a(zeta), full-contact gamma_eff, F)."""
     shape = np.broadcast_shapes(C.shape[:-1], np.shape(c0), np.shape(c1), *(np.shape(v) for v in labels))
@@ -101,7 +101,7 @@ def _partial_kernel(C, c0, c1, *labels, q, E_star, delta_gamma, sigma0, zeta, K_
     c1f = np.broadcast_to(c1, shape).reshape(-1)
     prob = AdhesionProblem(q, Cf, E_star, delta_gamma, zeta)
     try:
-        sol = solve_partial_contact(prob, sigma0, c0f, c1f, K_min=K_min, tol=tol)
+        sol = solve_partial_contact(prob, sigma0, c0f, c1f, K_min=K_min, tol=tol, progress=progress)
     except ComputationError as exc:
         lab = [np.broadcast_to(v, shape).reshape(-1) for v in labels]
         where = _where(lab, names, exc.failed) if hasattr(exc, "failed") else "?"
@@ -165,6 +165,25 @@ def _models(spec):
     return model, c0, c1
 
 
+def validate_adhesion(inp: StageInput) -> Preview:
+    """Before anything computes: the binding energy is given and the vanishing hrms can be sought
+    (zero load, a substrate hrms sweep); returns the nominal size of the Volterra grid."""
+    spec = inp["adhesion"]
+    _binding_energy(spec, e_star(inp))
+    psd = inp.upstream["psd"]
+    if spec["vanishing_hrms"]:
+        if spec["sigma0"] != 0:
+            raise UserError("the hrms at which adhesion vanishes is defined at zero load: set adhesion.sigma0 = 0 "
+                            "or adhesion.vanishing_hrms = false", key="adhesion.vanishing_hrms")
+        if psd.sizes.get("hrms_substrate", 0) < 2:
+            raise UserError("needs substrate.hrms as a sweep (a list or {from, to, num}) that reaches detachment",
+                            key="adhesion.vanishing_hrms")
+    lo, hi = psd.ranges["q"]
+    nodes = zeta_grid(hi / lo, inp["numerics.adhesion_points_per_decade"], inp["numerics.adhesion_zeta_offset"])
+    return Preview(sizes={"zeta": int(nodes.size), **({"model": len(spec["model"])} if len(spec["model"]) > 1 else {})},
+                   keys={"zeta": "numerics.adhesion_points_per_decade", "model": "adhesion.model"})
+
+
 def compute_adhesion(inp: StageInput) -> xr.Dataset:
     psd = inp.upstream["psd"]
     q = psd["q"].values
@@ -178,7 +197,8 @@ def compute_adhesion(inp: StageInput) -> xr.Dataset:
     nodes = zeta_grid(q[-1] / q[0], inp["numerics.adhesion_points_per_decade"], offset)
     model, c0, c1 = _models(spec)
     g1, P, g, sa, full, F = _partial(psd["psd_combined"], c0, c1, nodes, q=q, E_star=E_star, delta_gamma=dg,
-                                     sigma0=sigma0, K_min=K_min, tol=tol)
+                                     sigma0=sigma0, K_min=K_min, tol=tol,
+                                     progress=inp.progress("partial-contact marches", unit="march"))
     if "model" in full.dims:  # the full-contact theory and F do not depend on the S_el model
         full, F = full.isel(model=0, drop=True), F.isel(model=0, drop=True)
     ds = xr.Dataset({
@@ -191,7 +211,8 @@ def compute_adhesion(inp: StageInput) -> xr.Dataset:
     ds.attrs["load"] = "zero load" if sigma0 == 0 else f"nominal stress sigma0 = {sigma0:g} Pa"
     if spec["vanishing_hrms"]:
         ds = ds.compute()
-        ds["hrms_substrate_vanishing"] = _vanishing(ds, psd, c0, c1, q, E_star, dg, nodes, K_min, tol, sigma0)
+        ds["hrms_substrate_vanishing"] = _vanishing(ds, psd, c0, c1, q, E_star, dg, nodes, K_min, tol, sigma0,
+                                                    inp.progress("vanishing-hrms marches", unit="march"))
     return ds
 
 
@@ -212,14 +233,9 @@ def _vanishing_kernel(K, C1, C2, eta, c0, c1, *, hs, **kwargs):
     return h.reshape(shape), status.reshape(shape)
 
 
-def _vanishing(ds, psd, c0, c1, q, E_star, dg, nodes, K_min, tol, sigma0):
-    """The substrate hrms at which adhesion vanishes, per case; a UserError when the sweep does not bracket it."""
-    if sigma0 != 0:
-        raise UserError("the hrms at which adhesion vanishes is defined at zero load: set adhesion.sigma0 = 0 "
-                        "or adhesion.vanishing_hrms = false", key="adhesion.vanishing_hrms")
-    if "hrms_substrate" not in psd["psd_combined"].dims or psd.sizes["hrms_substrate"] < 2:
-        raise UserError("needs substrate.hrms as a sweep (a list or {from, to, num}) that reaches detachment",
-                        key="adhesion.vanishing_hrms")
+def _vanishing(ds, psd, c0, c1, q, E_star, dg, nodes, K_min, tol, sigma0, progress=None):
+    """The substrate hrms at which adhesion vanishes, per case (zero load and an hrms sweep: checked by
+    validate_adhesion); a UserError when the sweep does not bracket it."""
     hs = psd["hrms_substrate"].values
     order = np.argsort(hs)
     K = ds["gamma_eff_macroscopic"].isel(hrms_substrate=order)
@@ -231,7 +247,8 @@ def _vanishing(ds, psd, c0, c1, q, E_star, dg, nodes, K_min, tol, sigma0):
             _vanishing_kernel, K, C1, C2, eta, c0, c1,
             input_core_dims=[["hrms_substrate"], ["hrms_substrate", "q"], ["q"], [], [], []],
             output_core_dims=[[], []], output_dtypes=[float, int],
-            kwargs=dict(hs=hs[order], q=q, E_star=E_star, delta_gamma=dg, zeta=nodes, K_min=K_min, tol=tol),
+            kwargs=dict(hs=hs[order], q=q, E_star=E_star, delta_gamma=dg, zeta=nodes, K_min=K_min, tol=tol,
+                        progress=progress),
         )
     except ComputationError as exc:
         cases = ", ".join(f"{d} = {list(np.atleast_1d(K[d].values))}" for d in K.dims if d != "hrms_substrate" and d in K.coords)
@@ -257,11 +274,12 @@ def _vanishing(ds, psd, c0, c1, q, E_star, dg, nodes, K_min, tol, sigma0):
 # The stage
 # ----------------------------------------------------------------------------------------
 
-register(
+STAGE = register(
     Stage(
         name="adhesion",
         version="1",
         compute=compute_adhesion,
+        validate=validate_adhesion,
         requires=("psd",),
         main_outputs=("hrms_substrate_vanishing",),
         tolerance=1e-3,

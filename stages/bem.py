@@ -24,9 +24,10 @@ from roughcontact.stage import (
     Figure, Param, Section, Stage, StageInput, UserError, Var, register, register_params, register_section,
 )
 
-from .figures.bem import figure_bem_comparison
+from .figures.bem import figure_bem_comparison, figure_bem_reduced_pressure
 from .maps import check_eta, map_band, map_surfaces, measured_maps, topography_files
-from .shared import E_STAR, MATERIAL_KEYS, e_star
+from .shared import E_STAR, MAP_KEYS, MATERIAL_KEYS, e_star, surface_reads
+from .variants import VARIANT_KEYS, VARIANTS, theory_variants, variant_attrs
 
 #: the optional dependency and how to install it (named in the error without it)
 EXTRA = 'pip install "roughcontact[bem]"'
@@ -84,27 +85,60 @@ def solve_pair(h1, h2, pixel_size, E_star, pressures, **kwargs):
             f"pixel or less (tamaas: {exc.detail}); use larger pressures or a finer bem.grid", key="load.p") from None
 
 
+def _zeta_index(values, zeta: float, stage: str, set_by: str) -> int:
+    """Where the theory stage's magnifications hold the BEM's zeta; a UserError if they do not."""
+    hit = np.flatnonzero(np.isclose(np.atleast_1d(values), zeta, rtol=1e-9, atol=0.0))
+    if hit.size == 0:
+        raise UserError(
+            f"the {stage} stage has no magnification zeta = {zeta:.10g}, the band the BEM map resolves "
+            f"(q_cut / qL, set by {set_by}); add {zeta:.10g} to contact.zeta", key="contact.zeta")
+    return int(hit[0])
+
+
 def _at_zeta(ds: xr.Dataset, var: str, zeta: float, stage: str, set_by: str) -> xr.DataArray:
     """A theory variable at the BEM's magnification, which the stage must have computed."""
     da = ds[var]
     if "zeta" not in da.dims and "zeta" not in da.coords:
         return da
-    values = np.atleast_1d(da["zeta"].values)
-    hit = np.flatnonzero(np.isclose(values, zeta, rtol=1e-9, atol=0.0))
-    if hit.size == 0:
-        raise UserError(
-            f"the {stage} stage has no magnification zeta = {zeta:.10g}, the band the BEM map resolves "
-            f"(q_cut / qL, set by {set_by}); add {zeta:.10g} to contact.zeta", key="contact.zeta")
-    return da.isel(zeta=int(hit[0])) if "zeta" in da.dims else da
+    index = _zeta_index(da["zeta"].values, zeta, stage, set_by)
+    return da.isel(zeta=index) if "zeta" in da.dims else da
 
 
-def validate_bem(inp: StageInput) -> None:
-    """Before anything computes: the optional dependency must be there, and measured maps usable."""
+def single_surfaces(sizes) -> None:
+    """The BEM solves one pair of surfaces: no hrms sweep, no spectrum draws."""
+    for name in ("substrate", "solid"):
+        if sizes.get(f"hrms_{name}", 1) > 1:
+            raise UserError(f"the bem stage does not sweep hrms_{name}: give a single value", key=f"{name}.hrms")
+    if sizes.get("draw", 1) > 1:
+        raise UserError("the bem stage does not take spectrum draws: set bands.draws = 0", key="bands.draws")
+
+
+def check_bem(inp: StageInput) -> None:
+    """Before anything else is checked: the optional dependency, and usable measured maps."""
     solver()
     names = map_surfaces(inp)
     check_eta(inp, names)
     if names:
         measured_maps(inp, names)
+
+
+def validate_bem(inp: StageInput) -> None:
+    """Before anything computes: one pair of surfaces, and the BEM's magnification among those the
+    contact and separation stages compute."""
+    psd = inp.upstream["psd"]
+    single_surfaces(psd.sizes)
+    names = map_surfaces(inp)
+    lo, hi = psd.ranges["q"]
+    n_w = inp["bem.pixels_per_wavelength"]
+    if names:
+        maps = measured_maps(inp, names)
+        _, zeta, limit = map_band(lo, hi, maps["n"], maps["side"], maps["q_reliable"], n_w)
+    else:
+        zeta, limit = grid_band(lo, hi, inp["bem.grid"], n_w)[3], "bem.grid and bem.pixels_per_wavelength"
+    for stage in ("contact", "separation"):
+        values = inp.upstream[stage].coords.get("zeta") if stage in inp.upstream else None
+        if values is not None:
+            _zeta_index(values, zeta, stage, limit)
 
 
 def bem_band(inp: StageInput, q: np.ndarray, names: tuple[str, ...]) -> dict:
@@ -159,11 +193,13 @@ def _solve_all(inp, band, q, C1, C2, E_star, p_values, eta_values, edges) -> dic
     out["histogram"] = np.empty(shape + (edges.shape[-1] - 1,))
     out["hrms"], out["slope"] = np.empty(shape[1:]), np.empty(shape[1:])
     order = np.argsort(p_values)  # increasing load: each solve starts from the previous one
+    tick = inp.progress("BEM solves", total=p_values.size * (1 if band["maps"] is not None else R * eta_values.size),
+                        unit="solve")
     for j, r, h1, h2 in map_pairs(band, q, C1, C2, eta_values):
         out["hrms"][j, r] = float(np.std(h1 - h2))
         out["slope"][j, r] = rms_slope_of_map(h1 - h2, dx)
         res = solve_pair(h1, h2, dx, E_star, p_values[order], tolerance=inp["numerics.bem_tolerance"],
-                         stress_edges=edges[order, j])
+                         stress_edges=edges[order, j], progress=tick)
         for k in ("area", "mean_gap", "histogram", "overflow"):
             out[k][order, j, r] = res[k]
     return out
@@ -208,11 +244,7 @@ def _describe(inp: StageInput, ds: xr.Dataset, band: dict) -> None:
 def compute_bem(inp: StageInput) -> xr.Dataset:
     psd = inp.upstream["psd"]
     q = psd["q"].values
-    for name in ("psd_substrate", "psd_solid"):
-        extra = [d for d in psd[name].dims if d != "q"]
-        if extra:
-            raise UserError(f"the bem stage does not sweep {', '.join(extra)}: give a single value",
-                            key=f"{name.removeprefix('psd_')}.hrms")
+    single_surfaces(psd.sizes)
     C1, C2 = psd["psd_substrate"].values, psd["psd_solid"].values
     E_star = e_star(inp)
     names = map_surfaces(inp)
@@ -256,6 +288,7 @@ def compute_bem(inp: StageInput) -> xr.Dataset:
     with np.errstate(divide="ignore", invalid="ignore"):
         ds["area_ratio_theory_to_bem"] = (("p", "eta"), t_area / ds["bem_contact_area_ratio_mean"].values)
         ds["separation_ratio_theory_to_bem"] = (("p", "eta"), t_gap / ds["bem_mean_gap_mean"].values)
+    ds = _with_variants(inp, ds, psd, q, zeta_bem, p_values, has_eta, E_star)
     for k, v in attrs.items():
         ds[k] = xr.DataArray(v)
     ds["E_star"] = xr.DataArray(E_star)
@@ -264,6 +297,23 @@ def compute_bem(inp: StageInput) -> xr.Dataset:
         ds = ds.isel(eta=0, drop=True)
     if np.ndim(inp["load.p"]) == 0:
         ds = ds.isel(p=0)
+    return ds
+
+
+def _with_variants(inp, ds, psd, q, zeta_bem, p_values, has_eta, E_star) -> xr.Dataset:
+    """Every theory variant (eq 19 / eq 57 and each correction) at the BEM's magnification, and
+    its ratio to the BEM, over (p, eta, theory)."""
+    C = psd["psd_combined"]
+    rows = C.transpose("eta", "q").values if has_eta else np.atleast_2d(C.values)
+    area, gap = theory_variants(inp, q, rows, zeta_bem * q[0], p_values, E_star)
+    dims = ("p", "eta", "theory")
+    ds = ds.assign_coords(theory=list(VARIANTS))
+    ds["theory_variant_contact_area_ratio"] = (dims, area)
+    ds["theory_variant_mean_separation"] = (dims, gap)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ds["area_ratio_variant_to_bem"] = (dims, area / ds["bem_contact_area_ratio_mean"].values[..., None])
+        ds["separation_ratio_variant_to_bem"] = (dims, gap / ds["bem_mean_gap_mean"].values[..., None])
+    ds.attrs.update(variant_attrs(inp))
     return ds
 
 
@@ -280,14 +330,17 @@ _THEORY = "(at the BEM's magnification bem_zeta)"
 register(
     Stage(
         name="bem",
-        version="2",
+        version="3",
         compute=compute_bem,
+        check=check_bem,
         validate=validate_bem,
         requires=("psd", "contact", "separation"),
         params=(*MATERIAL_KEYS, "load.p", "interface.eta", "substrate", "solid", "bem.surfaces",
                 "bem.grid", "bem.realizations", "bem.seed", "bem.pixels_per_wavelength", "numerics.bem_tolerance",
-                "numerics.bem_stress_bins", "numerics.sigma_width"),
-        # measured maps (kind = "topography"): the engine reads them; used when bem.surfaces allows
+                "numerics.bem_stress_bins", "numerics.sigma_width", *VARIANT_KEYS),
+        # measured maps (kind = "topography"): the engine reads them; used when bem.surfaces allows.
+        # Synthesized surfaces come from the psd stage's spectra: of those sections, only the kind
+        reads=surface_reads({"topography": MAP_KEYS, "*": ()}),
         files=(topography_files("substrate"), topography_files("solid")),
         outputs={
             "bem_contact_area_ratio": Var("1", "relative contact area A/A0 from the BEM (fraction of pixels in "
@@ -306,8 +359,13 @@ register(
             "bem_mean_gap_mean": Var("m", "BEM mean interfacial separation, mean over realizations"),
             "bem_mean_gap_std": Var("m", "BEM mean interfacial separation, standard deviation over realizations "
                                          "(0: a single realization)"),
-            "theory_contact_area_ratio": Var("1", f"A/A0 of the contact stage (eq 19) {_THEORY}"),
-            "theory_mean_separation": Var("m", f"mean separation of the separation stage (eq 57) {_THEORY}"),
+            "theory_contact_area_ratio": Var("1", f"A/A0 of the contact stage (eq 19, or contact.correction) {_THEORY}"),
+            "theory_mean_separation": Var("m", f"mean separation of the separation stage (eq 57, with "
+                                               f"separation.refinement) {_THEORY}"),
+            "theory_variant_contact_area_ratio": Var("1", f"A/A0 of each theory variant (coordinate theory) {_THEORY}"),
+            "theory_variant_mean_separation": Var("m", f"mean separation of each theory variant {_THEORY}"),
+            "area_ratio_variant_to_bem": Var("1", "theory / BEM ratio of the relative contact area, per variant"),
+            "separation_ratio_variant_to_bem": Var("1", "theory / BEM ratio of the mean separation, per variant"),
             "area_ratio_theory_to_bem": Var("1", "theory / BEM ratio of the relative contact area (same band)"),
             "separation_ratio_theory_to_bem": Var("1", "theory / BEM ratio of the mean separation (same band; NaN "
                                                        "where both are 0)"),
@@ -316,11 +374,15 @@ register(
         },
         coords={
             "realization": Var("1", "index of the surface pair (random pairs; a single 0: the measured maps)"),
+            "theory": Var("1", "theory variant: persson (eq 19, eq 57), yang_persson, wang_mueser "
+                               "(attribute theory_variants)"),
             "bem_stress_level": Var("1", "histogram bin centre, sigma / (p + sigma_width sqrt(G))"),
             "bem_sigma": Var("Pa", "local contact pressure at each histogram bin centre"),
         },
         figures=(Figure("bem_comparison", "theory vs BEM: A/A0, mean separation and their ratios",
-                        ("bem",), figure_bem_comparison),),
+                        ("bem",), figure_bem_comparison),
+                 Figure("bem_reduced_pressure", "theory / BEM ratios of every variant against p/(E* g)",
+                        ("bem",), figure_bem_reduced_pressure)),
         doc="Exact FFT-BEM contact (tamaas) on synthesized or measured surface pairs, compared with the theory at the same band.",
     )
 )

@@ -21,6 +21,9 @@ from roughcontact.physics.friction import angular_integrals, friction_kernel
 from roughcontact.stage import Figure, Param, Section, Stage, StageInput, UserError, Var, register, register_params, register_section
 
 from .figures.friction import figure_area_eta, figure_area_substrate, figure_mu_eta, figure_mu_substrate, figure_psds
+from .figures.flash import figure_flash
+from .flash import FLASH_KEYS, FLASH_NUMERICS, FLASH_OUTPUTS, FLASH_PARAMS, check_flash, compute_flash, flash_attrs
+from .shared import CORRECTION_KEYS, area_correction
 
 # ----------------------------------------------------------------------------------------
 # Scene section and numerics
@@ -38,7 +41,7 @@ register_section(
             Param("correction", "choice", default="none", choices=("none", "yang_persson"),
                   doc="S(q) in mu: none (S = 1, the seed) or yang_persson (S = gamma + (1 - gamma) P^2)"),
             Param("gamma", "quantity", "", default=0.5, lo=0.0, hi=1.0, doc="gamma of the yang_persson correction"),
-        ),
+        ) + FLASH_PARAMS,
         doc="hysteretic friction of the elastic solid sliding on the substrate (nominal pressure: load.p)",
     )
 )
@@ -49,6 +52,7 @@ register_params(
     Param("friction_segment_nodes", "int", default=12, lo=2, presets={"fast": 6, "accurate": 16},
           ladder=(4, 4, 6, 8, 12, 12, 16, 16, 24),
           doc="Gauss-Legendre nodes per q segment of the friction integral (integrated in the variable G)"),
+    *FLASH_NUMERICS,
 )
 
 # ----------------------------------------------------------------------------------------
@@ -96,21 +100,33 @@ def compute_friction(inp: StageInput) -> xr.Dataset:
     )
     extras = bool({"sliding_G", "friction_density"} & inp.wanted)
     outputs = xr.apply_ufunc(
-        friction_kernel, q, psd["psd_combined"], A, B, p, nu, correction, gamma, extras, n_seg,
-        input_core_dims=[["q"], ["q"], ["q"], ["q"], [], [], [], [], [], []],
+        friction_kernel, q, psd["psd_combined"], A, B, p, nu, correction, gamma, extras, n_seg, *area_correction(inp),
+        input_core_dims=[["q"], ["q"], ["q"], ["q"], [], [], [], [], [], [], [], []],
         output_core_dims=[[], []] + ([["q"], ["q"]] if extras else []),
         dask="parallelized", output_dtypes=[float] * (4 if extras else 2),
     )
     mu, area = outputs[0], outputs[1]
+    thermal = check_flash(inp)
+    flash = compute_flash(inp, q, psd["psd_combined"], v, p, mod, nu, thermal, n_phi, n_seg, correction, gamma,
+                          area_correction(inp)) if thermal is not None else {}
+    if flash:
+        if "friction_coefficient_isothermal" in inp.wanted:
+            flash["friction_coefficient_isothermal"] = mu
+        mu, area = flash.pop("friction_coefficient"), flash.pop("sliding_contact_area_ratio")
     S_text = "S = 1" if correction == "none" else f"S = {gamma:g} + {1 - gamma:g} P^2"
     mu.attrs = {"formula": "mu = 2/((1-nu^2) sigma0) int dq q^3 C P S int_0^(pi/2) cos(phi) E''(q v cos phi) dphi, "
                            f"{S_text}"}
     last = ("v",) if v.ndim else ()
+    name, area_gamma = area_correction(inp)
+    area.attrs = {"area_correction": name, **({"area_correction_gamma": area_gamma} if area_gamma else {})}
+    mu.attrs.update(area.attrs)
     ds = xr.Dataset({"friction_coefficient": mu.transpose(..., *last),
                      "sliding_contact_area_ratio": area.transpose(..., *last)})
     for name, index in (("sliding_G", 2), ("friction_density", 3)):
         if name in inp.wanted:
             ds[name] = outputs[index].transpose(..., *last, "q")
+    for name, value in flash.items():
+        ds[name] = value.transpose(..., *last, "q") if "q" in value.dims else value.transpose(..., *last)
     for sweep in (v, p):
         if sweep.ndim == 0:
             ds = ds.assign_coords({sweep.name: sweep})
@@ -120,25 +136,28 @@ def compute_friction(inp: StageInput) -> xr.Dataset:
                       f"grid ({grid[-1]:.3g} rad/s): extrapolated with E' constant, E'' ~ 1/omega; "
                       "raise modulus.omega_max if that is not the glassy plateau", UserWarning, stacklevel=2)
     ds.attrs = _attrs(grid, needed_hi, n_phi, n_seg, S_text, nu)
+    if thermal is not None:
+        ds.attrs.update(flash_attrs(inp, thermal))
     return ds
 
 
 STAGE = register(
     Stage(
         name="friction",
-        version="1",
+        version="2",
         compute=compute_friction,
         requires=("modulus", "psd"),
         main_outputs=("friction_coefficient", "sliding_contact_area_ratio"),
         tolerance=1e-4,
-        params=("load.p", "material.nu", "friction.v", "friction.correction", "friction.gamma",
-                "numerics.friction_phi_nodes", "numerics.friction_segment_nodes"),
+        params=(*CORRECTION_KEYS, "load.p", "material.nu", "friction.v", "friction.correction", "friction.gamma",
+                "numerics.friction_phi_nodes", "numerics.friction_segment_nodes") + FLASH_KEYS,
         outputs={
             "friction_coefficient": Var("1", "hysteretic friction coefficient mu (eq 61)"),
             "sliding_contact_area_ratio": Var("1", "relative contact area while sliding A/A0 = P(q1) (eqs 31, 62)"),
             "sliding_G": Var("1", "G(q; v) of eq 62 (corrected: |E|^2, upper limit q), sigma0^2 absorbed",
                              optional=True),
             "friction_density": Var("1", "contribution to mu per unit ln q, d mu / d ln q", optional=True),
+            **FLASH_OUTPUTS,
         },
         figures=(
             Figure("fig6_psds", "C(q) of the two surfaces (seed Fig. 6)", ("psd", "friction"), figure_psds),
@@ -148,6 +167,8 @@ STAGE = register(
                    ("friction",), figure_area_substrate),
             Figure("fig10_friction_eta", "mu(v) for eta = 0, +1, -1 (seed Fig. 10)", ("friction",), figure_mu_eta),
             Figure("fig11_area_eta", "A/A0(v) for eta = 0, +1, -1 (seed Fig. 11)", ("friction",), figure_area_eta),
+            Figure("flash_temperature", "mu(v) with and without flash temperature, and T_q at q1", ("friction",),
+                   figure_flash, outputs=("flash_temperature",)),
         ),
         doc="mu(v, eta, T, p) and A/A0(v, ...) of hysteretic rubber friction (eqs 61-62, corrected).",
     )

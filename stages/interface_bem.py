@@ -20,9 +20,9 @@ import xarray as xr
 from roughcontact.physics.interface import stiffness_from_psd
 from roughcontact.physics.leakage import BRUGGEMAN_AREA, leak_rate, leakage_kernel, sealing_pressure
 from roughcontact.physics.reynolds import flow_factors, percolates
-from roughcontact.stage import Figure, Param, Stage, StageInput, UserError, Var, register, register_params
+from roughcontact.stage import Figure, Param, Stage, StageInput, Var, register, register_params
 
-from .bem import bem_band, bem_eta_values, map_pairs, solve_pair, validate_bem
+from .bem import bem_band, bem_eta_values, check_bem, map_pairs, single_surfaces, solve_pair
 from .figures.interface_bem import figure_interface_bem
 from .leakage import NUMERICS as LEAKAGE_NUMERICS, SEAL_KEYS, leakage_settings, seal_parameters
 from .maps import check_eta, map_surfaces, topography_files
@@ -41,11 +41,17 @@ BEM_KEYS = ("interface.eta", "substrate", "solid", "bem.surfaces", "bem.grid", "
             "bem.pixels_per_wavelength", "numerics.bem_tolerance")
 
 
-def _solver(inp, E_star, dx):
+def _solver(inp, E_star, dx, tick):
     """solve(h1, h2, pressures) -> the BEM's results with gap maps at the sorted pressures."""
     def solve(h1, h2, pressures):
-        return solve_pair(h1, h2, dx, E_star, np.sort(pressures), tolerance=inp["numerics.bem_tolerance"], fields=True)
+        return solve_pair(h1, h2, dx, E_star, np.sort(pressures), tolerance=inp["numerics.bem_tolerance"], fields=True,
+                          progress=tick)
     return solve
+
+
+def validate_interface_bem(inp: StageInput) -> None:
+    """Before anything computes: one pair of surfaces (no hrms sweep, no spectrum draws)."""
+    single_surfaces(inp.upstream["psd"].sizes)
 
 
 def _open(gap, axis) -> bool:
@@ -90,7 +96,10 @@ def _solve_exact(inp, band, q, C1, C2, E_star, p_values, eta_values) -> dict:
     shape = (p_values.size, eta_values.size, band["R"])
     out = {k: np.empty(shape) for k in ("area", "gap", "stiffness", "flow")}
     out["seal"], out["seal_area"] = np.empty(shape[1:]), np.empty(shape[1:])
-    solve = _solver(inp, E_star, band["dx"])
+    pairs = band["R"] * (1 if band["maps"] is not None else eta_values.size)
+    steps = int(inp["numerics.interface_bem_bisections"])
+    solve = _solver(inp, E_star, band["dx"], inp.progress("BEM solves", total=pairs * (3 * p_values.size + 2 * steps),
+                                                          unit="solve"))
     pressures = np.concatenate([p_values * np.exp(-step), p_values, p_values * np.exp(step)])
     order = np.argsort(pressures)
     for j, r, h1, h2 in map_pairs(band, q, C1, C2, eta_values):
@@ -130,11 +139,7 @@ def _theory(inp, psd, band, p_values, eta_values, E_star) -> dict:
 
 
 def _spectra(psd: xr.Dataset):
-    for name in ("psd_substrate", "psd_solid"):
-        extra = [d for d in psd[name].dims if d != "q"]
-        if extra:
-            raise UserError(f"the interface_bem stage does not sweep {', '.join(extra)}: give a single value",
-                            key=f"{name.removeprefix('psd_')}.hrms")
+    single_surfaces(psd.sizes)
     return psd["psd_substrate"].values, psd["psd_solid"].values
 
 
@@ -187,7 +192,8 @@ register(
         name="interface_bem",
         version="1",
         compute=compute_interface_bem,
-        validate=validate_bem,
+        check=check_bem,
+        validate=validate_interface_bem,
         requires=("psd",),
         params=(*MATERIAL_KEYS, "load.p", *BEM_KEYS, *SEPARATION_KEYS, *SEAL_KEYS, "leakage.percolation_area",
                 *LEAKAGE_NUMERICS, "numerics.interface_bem_step", "numerics.interface_bem_bisections"),

@@ -16,6 +16,7 @@ import xarray as xr
 
 from roughcontact.physics.estimators import binned_psd_on_grid, coherence_on_grid, valid_bins
 from roughcontact.physics.preprocessing import detrend, hann_window_1d, hann_window_radial, tip_radius_cutoff
+from roughcontact.physics.uncertainty import bin_curvature_factor, interpolation_unbiasing
 from roughcontact.stage import FileInput, UserError
 
 from .shared import DETREND_DEGREE, SURFACES, is_rough, is_topography
@@ -72,7 +73,7 @@ def prepare_map(name: str, spec: dict, topo, index: int) -> dict:
     analysis = "profiles" if h.ndim == 1 else spec["analysis"]
     return dict(h=h, sizes=tuple(float(s) for s in sizes), periodic=bool(periodic), detrend=detrend_how,
                 window=window, analysis=analysis, unit=f"{topo.unit} ({topo.unit_source})", size_source=size_note,
-                path=path, format=topo.format, index=index)
+                path=path, format=topo.format, index=index, name=name)
 
 
 def _cutoffs(p, spec):
@@ -100,6 +101,10 @@ def process_map(p: dict, spec: dict) -> dict:
     profiles = p["analysis"] == "profiles"
     h = detrend(h, DETREND_DEGREE[p["detrend"]], profiles=profiles)
     rms = float(np.sqrt(np.mean(h * h)))
+    if not rms > 1e-12 * float(np.max(np.abs(p["h"]))):  # nothing left but rounding (or all equal)
+        raise UserError(f"a flat {'profile' if profiles else 'map'}: no roughness is left after removing the "
+                        f"{p['detrend']} (rms {rms:.3g} m), so there is no spectrum to measure",
+                        file=p["path"], key=f"{p['name']}.files")
     if p["window"] == "hann":
         if profiles:
             h *= hann_window_1d(h.shape[0]).reshape((-1,) + (1,) * (h.ndim - 1))
@@ -119,11 +124,27 @@ def process_map(p: dict, spec: dict) -> dict:
     return p
 
 
+def measured_bins(ds: xr.Dataset, name: str):
+    """The topography stage's valid bins of surface ``name``: mean wavenumbers q (1/m,
+    increasing), the PSD at q (m^4: the bin mean corrected for the curvature of the spectrum
+    across the bin, :func:`roughcontact.physics.uncertainty.bin_curvature_factor`) and its
+    standard error (m^4, same correction)."""
+    psd = ds[f"psd_{name}_measured"].values
+    ok = np.isfinite(psd) & (psd > 0) & np.isfinite(ds[f"q_{name}_measured"].values)
+    err = ds[f"psd_{name}_measured_error"].values[ok] if f"psd_{name}_measured_error" in ds else np.zeros(ok.sum())
+    q, C = ds[f"q_{name}_measured"].values[ok], psd[ok]
+    order = np.argsort(q)
+    q, C, err = q[order], C[order], err[order]
+    factor = bin_curvature_factor(q, C, int(ds.attrs.get("bins_per_decade", 20))) if q.size >= 2 else np.ones_like(q)
+    return q, C * factor, err * factor
+
+
 def measured_psd_on_grid(ds: xr.Dataset, name: str, q_grid: np.ndarray, how: str):
     """The topography stage's measured PSD of surface ``name`` on the psd stage's ``q_grid``
-    (m^4; :func:`roughcontact.physics.estimators.binned_psd_on_grid`) and the attributes
-    saying how. ``how`` = ``name.extend``: beyond the measured range 'none' is an error."""
-    q, C = valid_bins(ds[f"q_{name}_measured"].values, ds[f"psd_{name}_measured"].values, positive=True)
+    (m^4; :func:`measured_bins` put on the grid by
+    :func:`roughcontact.physics.estimators.binned_psd_on_grid`) and the attributes saying how.
+    ``how`` = ``name.extend``: beyond the measured range 'none' is an error."""
+    q, C, err = measured_bins(ds, name)
     if q.size < 2:
         raise UserError("the measured PSD has fewer than two valid bins", key=f"{name}.files")
     lo, hi = q_grid[0], q_grid[-1]
@@ -132,9 +153,13 @@ def measured_psd_on_grid(ds: xr.Dataset, name: str, q_grid: np.ndarray, how: str
             f"the q grid [{lo:.4g}, {hi:.4g}] 1/m reaches outside the measured range [{q[0]:.4g}, {q[-1]:.4g}] 1/m; "
             f"set grid.q_min/q_max inside it or {name}.extend = 'power_law' or 'zero'", key=f"{name}.extend")
     attrs = {"surface": "measured topography", "source_files": ds[f"psd_{name}_measured"].attrs.get("files", ""),
-             "interpolation": "log-log linear between bin averages", "extension": how,
+             "interpolation": "log-log linear between the bins' PSD at their mean |q| (bin averages corrected for the "
+                              "spectrum's curvature across a bin; the interpolation's bias between bins of few modes "
+                              "removed)", "extension": how,
              "measured_q_range": f"{q[0]:.6g} {q[-1]:.6g} 1/m"}
-    return binned_psd_on_grid(q_grid, q, C, how), attrs
+    with np.errstate(divide="ignore"):
+        modes = np.where(err > 0, (C / np.where(err > 0, err, 1.0)) ** 2, 1e12)
+    return binned_psd_on_grid(q_grid, q, C, how) * interpolation_unbiasing(q_grid, q, modes, how), attrs
 
 
 def measured_coherence_on_grid(ds: xr.Dataset, q_grid: np.ndarray) -> np.ndarray:

@@ -38,7 +38,10 @@ from roughcontact.stage import (
     FileInput, Figure, Param, Section, Stage, StageInput, UserError, Var, register, register_params, register_section,
 )
 
+from .figures.mastercurve import figure_master_curve
 from .figures.modulus import figure_modulus
+from .mastercurve import DMA_COORDS, DMA_OUTPUTS, DMA_PARAMS, dma_options, dma_variables, master_curve, shift_spec
+from .mastercurve import model as dma_model
 
 
 def complex_modulus(ds: xr.Dataset) -> xr.DataArray:
@@ -61,7 +64,7 @@ _COMMON = (
     Param("shift", "choice", default="none", choices=("none", "wlf", "table"),
           doc="horizontal temperature shift a_T: none, WLF (C1, C2) or a table"),
     Param("C1", "quantity", "", default=17.44, lo=0.0, lo_open=True, doc="WLF C1 (universal 17.44 about Tg)"),
-    Param("C2", "quantity", "K", default=51.6, lo=0.0, lo_open=True,
+    Param("C2", "quantity", "K", default=51.6, lo=0.0, lo_open=True, difference=True,
           doc="WLF C2, a temperature difference in K (universal 51.6 K about Tg)"),
     Param("shift_T", "quantities", "K", default=None, lo=0.0, lo_open=True, doc="shift table: temperatures"),
     Param("shift_log10_aT", "quantities", "", default=None, doc="shift table: log10 a_T at shift_T"),
@@ -100,6 +103,9 @@ _FILE = (
 
 def _check_modulus(values: dict, key: str) -> None:
     kind = values["kind"]
+    if kind == "dma" and (values["shift"] != "none" or values["vertical_shift"] != "none"):
+        raise UserError("the dma source fits its own temperature shifts: remove shift / vertical_shift "
+                        "(see fit and vertical_fit)", key=f"{key}.{'shift' if values['shift'] != 'none' else 'vertical_shift'}")
     if kind == "box":
         if not values["tau1"] < values["tau2"]:
             raise UserError(f"needs tau1 < tau2, got {values['tau1']:g} s and {values['tau2']:g} s", key=f"{key}.tau2")
@@ -145,7 +151,7 @@ register_section(
         doc="the complex modulus E(omega, T) of the elastic solid (for friction)",
         optional=True,
         discriminator="kind",
-        variants={"box": _BOX, "prony": _PRONY, "elastic": _ELASTIC, "file": _FILE},
+        variants={"box": _BOX, "prony": _PRONY, "elastic": _ELASTIC, "file": _FILE, "dma": DMA_PARAMS},
         check=_check_modulus,
     )
 )
@@ -160,7 +166,8 @@ register_params(
 # Stage wrapper
 # ----------------------------------------------------------------------------------------
 
-_NO_SECTION = "this scene needs the complex modulus: add a [modulus] section (kind = 'box', 'prony', 'elastic' or 'file')"
+_NO_SECTION = ("this scene needs the complex modulus: add a [modulus] section (kind = 'box', 'prony', 'elastic', "
+               "'file' or 'dma')")
 
 
 def _shift_factors(spec, T: np.ndarray) -> tuple[np.ndarray, np.ndarray, str]:
@@ -230,7 +237,8 @@ def validate_modulus(inp: StageInput) -> None:
     spec = inp["modulus"]
     if spec is None:
         raise UserError(_NO_SECTION, key="modulus")
-    _shift_factors(spec, np.atleast_1d(np.asarray(spec["T"], dtype=float)))
+    if spec["kind"] != "dma":  # the dma source's shifts are fitted in compute
+        _shift_factors(spec, np.atleast_1d(np.asarray(spec["T"], dtype=float)))
 
 
 def compute_modulus(inp: StageInput) -> xr.Dataset:
@@ -238,10 +246,20 @@ def compute_modulus(inp: StageInput) -> xr.Dataset:
     if spec is None:
         raise UserError(_NO_SECTION, key="modulus")
     T = inp.sweep("T", spec["T"])
+    extra = {}
+    if spec["kind"] == "dma":
+        fitted = master_curve(spec, inp.files["modulus.sweeps"])
+        spec = shift_spec(spec, fitted)
+        _check_wlf(spec)
+        model, model_attrs = dma_model(fitted)
+        times, curve = (fitted.times[0], fitted.times[-1]), None
+        extra = dma_variables(fitted, inp.wanted)
+    else:
+        curve = inp.files["modulus.path"] if spec["kind"] == "file" else None
+        model, model_attrs = _model(spec, curve)
+        times = _times(spec)
     aT_values, bT_values, how = _shift_factors(spec, np.atleast_1d(np.asarray(spec["T"], dtype=float)))
-    curve = inp.files["modulus.path"] if spec["kind"] == "file" else None
-    model, model_attrs = _model(spec, curve)
-    grid = frequency_grid(aT_values, inp["numerics.modulus_points_per_decade"], _times(spec),
+    grid = frequency_grid(aT_values, inp["numerics.modulus_points_per_decade"], times,
                           curve.omega if curve is not None else None, spec["omega_min"], spec["omega_max"])
     omega = xr.DataArray(grid, dims=("omega",))
     if T.ndim:  # a_T, b_T as DataArrays over the T sweep (scalars when T is one value)
@@ -264,7 +282,8 @@ def compute_modulus(inp: StageInput) -> xr.Dataset:
     Ep = (Ep * bT).transpose(..., "omega")
     Epp = (Epp * bT).transpose(..., "omega")
     ds = xr.Dataset({"storage_modulus": Ep, "loss_modulus": Epp, "loss_tangent": Epp / Ep,
-                     "shift_factor": aT, "vertical_shift_factor": bT}).assign_coords(omega=omega)
+                     "shift_factor": aT, "vertical_shift_factor": bT, **_law_variables(spec), **extra}
+                    ).assign_coords(omega=omega)
     if T.ndim == 0:
         ds = ds.assign_coords(T=T)
     ds.attrs = {
@@ -274,8 +293,34 @@ def compute_modulus(inp: StageInput) -> xr.Dataset:
         "grid": "geometric omega grid; between nodes use roughcontact.physics.viscoelastic.modulus_at (cubic in "
                 "log-log, physical asymptotes outside)",
         "T_ref": spec["T_ref"] if spec["T_ref"] is not None else "none",
+        "horizontal_shift": spec["shift"], "vertical_shift": spec["vertical_shift"],
     }
     return ds
+
+
+def _check_wlf(spec) -> None:
+    """The fitted WLF law is finite at the scene's temperatures (T > T_ref - C2)."""
+    T = np.atleast_1d(np.asarray(spec["T"], dtype=float))
+    if np.any(spec["C2"] + T - spec["T_ref"] <= 0):
+        raise UserError(f"the WLF law fitted to the DMA sweeps is singular at T <= T_ref - C2 = "
+                        f"{spec['T_ref'] - spec['C2']:.6g} K; use temperatures above it", key="modulus.T")
+
+
+def _law_variables(spec) -> dict:
+    """The temperature law as data (read back by the friction stage's flash temperature): WLF
+    constants, reference temperature and the shift table."""
+    out = {}
+    if spec["T_ref"] is not None:
+        out["reference_temperature"] = xr.DataArray(float(spec["T_ref"]))
+    if spec["shift"] == "wlf":
+        out["wlf_C1"], out["wlf_C2"] = xr.DataArray(float(spec["C1"])), xr.DataArray(float(spec["C2"]))
+    table = {"shift_table_log10_aT": spec["shift_log10_aT"] if spec["shift"] == "table" else None,
+             "shift_table_log10_bT": spec["shift_log10_bT"] if spec["vertical_shift"] == "table" else None}
+    for name, values in table.items():
+        if values is not None:
+            out[name] = xr.DataArray(np.atleast_1d(np.asarray(values, dtype=float)), dims=("shift_T",),
+                                     coords={"shift_T": np.atleast_1d(np.asarray(spec["shift_T"], dtype=float))})
+    return out
 
 
 def _master_curve_options(params) -> dict:
@@ -288,19 +333,29 @@ def _master_curve_options(params) -> dict:
 register(
     Stage(
         name="modulus",
-        version="1",
+        version="2",
         compute=compute_modulus,
         validate=validate_modulus,
         params=("modulus", "numerics.modulus_points_per_decade"),
-        files=(FileInput("modulus.path", reader="master_curve", options=_master_curve_options),),
+        files=(FileInput("modulus.path", reader="master_curve", options=_master_curve_options),
+               FileInput("modulus.sweeps", reader="dma", options=dma_options)),
         outputs={
             "storage_modulus": Var("Pa", "storage modulus E' = Re E(omega, T)"),
             "loss_modulus": Var("Pa", "loss modulus E'' = Im E(omega, T)"),
             "loss_tangent": Var("1", "loss tangent tan delta = E''/E'"),
             "shift_factor": Var("1", "horizontal shift factor a_T: E(omega, T) = b_T E(omega a_T, T_ref)"),
             "vertical_shift_factor": Var("1", "vertical shift factor b_T"),
+            "reference_temperature": Var("K", "reference temperature T_ref of the temperature shift"),
+            "wlf_C1": Var("1", "WLF constant C1: log10 a_T = -C1 (T - T_ref) / (C2 + T - T_ref)"),
+            "wlf_C2": Var("K", "WLF constant C2"),
+            "shift_table_log10_aT": Var("1", "log10 a_T of the shift table"),
+            "shift_table_log10_bT": Var("1", "log10 b_T of the shift table (vertical shift)"),
+            **DMA_OUTPUTS,
         },
-        figures=(Figure("fig7_modulus", "E'(f), E''(f) (seed Fig. 7)", ("modulus",), figure_modulus),),
+        coords={"shift_T": Var("K", "temperatures of the shift table (for dma: of the sweeps)"), **DMA_COORDS},
+        figures=(Figure("fig7_modulus", "E'(f), E''(f) (seed Fig. 7)", ("modulus",), figure_modulus),
+                 Figure("dma_master_curve", "DMA sweeps shifted onto the master curve, and a_T(T)", ("modulus",),
+                        figure_master_curve, outputs=("sweep_log10_aT",))),
         doc="Complex modulus E(omega, T) (model or measured master curve, WLF / table shift), stored as E' and E''.",
     )
 )

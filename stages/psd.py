@@ -10,7 +10,8 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from roughcontact.physics.quadrature import log_grid
+from roughcontact.physics.quadrature import log_grid, log_grid_size
+from roughcontact.physics.uncertainty import combined_psd_error
 from roughcontact.physics.spectra import (
     CONVENTIONS,
     extend_psd,
@@ -21,10 +22,21 @@ from roughcontact.physics.spectra import (
     self_affine_hrms_factor,
     self_affine_psd,
 )
-from roughcontact.stage import FileInput, Stage, StageInput, UserError, Var, register
+from roughcontact.stage import FileInput, Preview, Stage, StageInput, UserError, Var, register
 
 from .maps import measured_coherence_on_grid, measured_psd_on_grid
-from .shared import SURFACES, is_rough, needs_topography
+from .measured import coherence_error_grid, drawn_coherence, drawn_psd, psd_error_grid
+from .shared import SURFACES, is_measured, is_rough, needs_topography, surface_reads
+
+
+def _check_extent(name: str, spec: dict, spectrum, lo: float, hi: float) -> None:
+    """With extend = 'none' the q grid [lo, hi] must lie inside the file's range."""
+    q_si = spectrum.q
+    if spec["extend"] == "none" and (lo < q_si[0] * (1 - 1e-9) or hi > q_si[-1] * (1 + 1e-9)):
+        raise UserError(
+            f"the q grid [{lo:.4g}, {hi:.4g}] 1/m reaches outside the file's range [{q_si[0]:.4g}, {q_si[-1]:.4g}] 1/m; "
+            f"set grid.q_min/q_max inside it or {name}.extend = 'power_law' or 'zero'",
+            file=str(spectrum.path), key=f"{name}.extend")
 
 
 def _measured(name: str, spec: dict, spectrum, q_grid: np.ndarray) -> tuple[np.ndarray, dict]:
@@ -33,12 +45,7 @@ def _measured(name: str, spec: dict, spectrum, q_grid: np.ndarray) -> tuple[np.n
     q_si, convention = spectrum.q, spectrum.convention
     C = psd_to_persson(q_si, spectrum.values, convention, spec.get("hurst", 0.5))
     how = spec["extend"]
-    lo, hi = q_grid[0], q_grid[-1]
-    if how == "none" and (lo < q_si[0] * (1 - 1e-9) or hi > q_si[-1] * (1 + 1e-9)):
-        raise UserError(
-            f"the q grid [{lo:.4g}, {hi:.4g}] 1/m reaches outside the file's range [{q_si[0]:.4g}, {q_si[-1]:.4g}] 1/m; "
-            f"set grid.q_min/q_max inside it or {name}.extend = 'power_law' or 'zero'",
-            file=str(spectrum.path), key=f"{name}.extend")
+    _check_extent(name, spec, spectrum, q_grid[0], q_grid[-1])
     attrs = dict(
         spectrum.attrs,
         source_file=str(spectrum.path),
@@ -51,7 +58,9 @@ def _measured(name: str, spec: dict, spectrum, q_grid: np.ndarray) -> tuple[np.n
     return extend_psd(q_grid, q_si, C, how if how != "none" else "zero"), attrs
 
 
-def _q_range(inp: StageInput) -> tuple[float, float, list[float]]:
+def _q_range(inp: StageInput, topography: Preview | None) -> tuple[float, float, list[float]]:
+    """The q grid's ends and knots, from the surfaces (``topography``: the preview of the
+    topography stage's result, for measured maps)."""
     lows, highs, knots = [], [], []
     for name in SURFACES:
         spec = inp[name]
@@ -61,11 +70,13 @@ def _q_range(inp: StageInput) -> tuple[float, float, list[float]]:
             lows.append(spec["qL"])
             highs.append(spec["q1"])
             knots += [spec["qL"], spec["q0"], spec["q1"]]
-        elif spec["kind"] == "topography":  # measured range, from the topography stage
-            ds = inp.upstream["topography"]
-            q = ds[f"q_{name}_measured"].values[np.isfinite(ds[f"psd_{name}_measured"].values)]
-            lows.append(float(np.nanmin(q)))
-            highs.append(float(np.nanmax(q)))
+        elif is_measured(spec):  # measured range (bins holding modes), from the topography stage
+            found = topography.ranges.get(f"q_{name}_measured") if topography is not None else None
+            if found is None:
+                raise UserError("the measured maps give no wavenumber bins",
+                                key=f"{name}.{'container' if spec['kind'] == 'container' else 'files'}")
+            lows.append(found[0])
+            highs.append(found[1])
         else:
             q = inp.files[f"{name}.path"].q
             lows.append(float(q[0]))
@@ -79,62 +90,104 @@ def _q_range(inp: StageInput) -> tuple[float, float, list[float]]:
     return lo, hi, knots
 
 
-def compute_psd(inp: StageInput) -> xr.Dataset:
-    lo, hi, knots = _q_range(inp)
-    q_values = log_grid(lo, hi, inp["numerics.points_per_decade"], knots)
-    q = xr.DataArray(q_values, dims=("q",))
-    surfaces: dict[str, xr.DataArray] = {}
+def validate_psd(inp: StageInput) -> Preview:
+    """Before anything computes: the q grid (its range, that the files cover it), the coherence
+    asked for; returns the q grid's size and range for the downstream checks."""
+    topography = inp.upstream.get("topography")
+    lo, hi, knots = _q_range(inp, topography)
     for name in SURFACES:
         spec = inp[name]
-        if not is_rough(spec):
-            da = xr.zeros_like(q)
-            attrs = {"surface": "smooth"}
-        elif spec["kind"] == "self_affine":
-            attrs = {"surface": "self-affine", "H": spec["H"], "qL": spec["qL"], "q0": spec["q0"], "q1": spec["q1"]}
-            factor = float(self_affine_hrms_factor(spec["H"], spec["qL"], spec["q0"], spec["q1"]))
-            if spec.get("hrms") is not None:
-                hrms = inp.sweep(f"hrms_{name}", spec["hrms"])
-                C0 = hrms**2 / factor
-            else:
-                C0 = xr.DataArray(spec["C0"])
-            shape = xr.DataArray(self_affine_psd(q_values, spec["H"], spec["qL"], spec["q0"], spec["q1"], 1.0), dims=("q",))
-            da = C0 * shape
-        elif spec["kind"] == "topography":
-            values, attrs = measured_psd_on_grid(inp.upstream["topography"], name, q_values, spec["extend"])
-            da = xr.DataArray(values, dims=("q",))
+        if is_rough(spec) and spec["kind"] == "psd_file":
+            _check_extent(name, spec, inp.files[f"{name}.path"], lo, hi)
+        elif is_rough(spec) and is_measured(spec) and spec["extend"] == "none" and topography is not None:
+            found = topography.ranges[f"q_{name}_measured"]
+            if lo < found[0] * (1 - 1e-9) or hi > found[1] * (1 + 1e-9):
+                raise UserError(f"the q grid [{lo:.4g}, {hi:.4g}] 1/m reaches outside the measured range "
+                                f"[{found[0]:.4g}, {found[1]:.4g}] 1/m; set grid.q_min/q_max inside it or "
+                                f"{name}.extend = 'power_law' or 'zero'", key=f"{name}.extend")
+    if isinstance(inp["interface.eta"], str) and (topography is None or "coherence" not in topography.variables):
+        why = topography.attrs.get("pairing", "") if topography is not None else ""
+        raise UserError("eta = 'measured' needs both surfaces of kind 'topography' (or 'container'), paired on the same "
+                        "grid" + (f" ({why})" if why else ""), key="interface.eta")
+    size = log_grid_size(lo, hi, inp["numerics.points_per_decade"], knots)
+    grid = {"q": log_grid(lo, hi, inp["numerics.points_per_decade"], knots)} if size <= 10**6 else {}
+    return Preview(sizes={"q": size}, ranges={"q": (lo, hi)}, keys={"q": "numerics.points_per_decade"}, coords=grid)
+
+
+def _surface(inp: StageInput, name: str, q: xr.DataArray, draw):
+    """One surface's PSD on the grid (with dimension draw when measured and drawn), its attributes
+    and its standard error on the grid (0: analytic, smooth or a file without errors)."""
+    spec, q_values = inp[name], q.values
+    err = np.zeros(q_values.size)
+    if not is_rough(spec):
+        return xr.zeros_like(q), {"surface": "smooth"}, err
+    if spec["kind"] == "self_affine":
+        attrs = {"surface": "self-affine", "H": spec["H"], "qL": spec["qL"], "q0": spec["q0"], "q1": spec["q1"]}
+        factor = float(self_affine_hrms_factor(spec["H"], spec["qL"], spec["q0"], spec["q1"]))
+        if spec.get("hrms") is not None:
+            C0 = inp.sweep(f"hrms_{name}", spec["hrms"]) ** 2 / factor
         else:
-            values, attrs = _measured(name, spec, inp.files[f"{name}.path"], q_values)
-            da = xr.DataArray(values, dims=("q",))
-        da = da.assign_coords(q=q).transpose(..., "q")
-        da.attrs = attrs
-        surfaces[name] = da
+            C0 = xr.DataArray(spec["C0"])
+        shape = xr.DataArray(self_affine_psd(q_values, spec["H"], spec["qL"], spec["q0"], spec["q1"], 1.0), dims=("q",))
+        return C0 * shape, attrs, err
+    if is_measured(spec):
+        ds = inp.upstream["topography"]
+        values, attrs = measured_psd_on_grid(ds, name, q_values, spec["extend"])
+        err = psd_error_grid(ds, name, q_values, spec["extend"])
+        if draw is None:
+            return xr.DataArray(values, dims=("q",)), attrs, err
+        attrs["draws"] = "draw 0: the measured PSD; draws 1..N: C* = C n / Gamma(n + 1, 1) per bin (n = (C / error)^2)"
+        return drawn_psd(draw, ds, name, q_values, spec["extend"], inp["bands.seed"]), attrs, err
+    values, attrs = _measured(name, spec, inp.files[f"{name}.path"], q_values)
+    return xr.DataArray(values, dims=("q",)), dict(attrs, error="none known (a PSD file carries no errors)"), err
+
+
+def _combined(inp: StageInput, surfaces, q: xr.DataArray, draw):
+    """C(q, eta) of the pair (eq 52), how it was formed, and eta with its standard error on the grid."""
     both = is_rough(inp["substrate"]) and is_rough(inp["solid"])
-    if isinstance(inp["interface.eta"], str):  # "measured": eta(q) from paired topographies
-        if "topography" not in inp.upstream or "coherence" not in inp.upstream["topography"]:
-            why = inp.upstream["topography"].attrs.get("pairing", "") if "topography" in inp.upstream else ""
-            raise UserError("eta = 'measured' needs both surfaces of kind 'topography', paired on the same grid"
-                            + (f" ({why})" if why else ""), key="interface.eta")
-        eta_q = xr.DataArray(measured_coherence_on_grid(inp.upstream["topography"], q_values), dims=("q",))
-        combined = xr.apply_ufunc(psd_combined, surfaces["substrate"], surfaces["solid"], eta_q.assign_coords(q=q),
+    if isinstance(inp["interface.eta"], str):  # "measured": eta(q) from paired topographies (validate_psd checked them)
+        ds = inp.upstream["topography"]
+        eta0 = xr.DataArray(measured_coherence_on_grid(ds, q.values), dims=("q",)).assign_coords(q=q)
+        eta = eta0 if draw is None else drawn_coherence(draw, ds, q.values, inp["bands.seed"]).assign_coords(q=q)
+        combined = xr.apply_ufunc(psd_combined, surfaces["substrate"], surfaces["solid"], eta,
                                   dask="parallelized", output_dtypes=[float])
         how = ("C = (sqrt C1 - eta sqrt C2)^2 + (1 - eta^2) C2 (eq 52) with the measured eta(q) of the topography "
                "stage (interpolated in log q, held constant beyond the measured range)")
-    elif both:
+        return combined, how, eta0, xr.DataArray(coherence_error_grid(ds, q.values), dims=("q",))
+    if both:
         eta = inp.sweep("eta", inp["interface.eta"])
-        combined = xr.apply_ufunc(
-            psd_combined, surfaces["substrate"], surfaces["solid"], eta, dask="parallelized", output_dtypes=[float]
-        )
-        how = "C = (sqrt C1 - eta sqrt C2)^2 + (1 - eta^2) C2 (eq 52, non-negative form)"
-    else:
-        combined = surfaces["substrate"] + surfaces["solid"]
-        how = "only one surface is rough: C = C1 + C2 (eta has no effect)"
+        combined = xr.apply_ufunc(psd_combined, surfaces["substrate"], surfaces["solid"], eta, dask="parallelized",
+                                  output_dtypes=[float])
+        return combined, "C = (sqrt C1 - eta sqrt C2)^2 + (1 - eta^2) C2 (eq 52, non-negative form)", eta, 0.0
+    combined = surfaces["substrate"] + surfaces["solid"]
+    return combined, "only one surface is rough: C = C1 + C2 (eta has no effect)", xr.DataArray(0.0), 0.0
+
+
+def compute_psd(inp: StageInput) -> xr.Dataset:
+    topography = Preview.of(inp.upstream["topography"]) if "topography" in inp.upstream else None
+    lo, hi, knots = _q_range(inp, topography)
+    q_values = log_grid(lo, hi, inp["numerics.points_per_decade"], knots)
+    q = xr.DataArray(q_values, dims=("q",))
+    draws = inp["bands.draws"]
+    draw = inp.sweep("draw", draws) if np.ndim(draws) else None
+    surfaces, errors = {}, {}
+    for name in SURFACES:
+        da, attrs, err = _surface(inp, name, q, draw)
+        da = da.assign_coords(q=q).transpose(..., "q")
+        da.attrs = attrs
+        surfaces[name], errors[name] = da, xr.DataArray(err, dims=("q",), coords={"q": q})
+    combined, how, eta, eta_err = _combined(inp, surfaces, q, draw)
     combined = combined.transpose(..., "q")
     combined.attrs = {"formula": how}
+    nominal = {k: v.isel(draw=0, drop=True) if "draw" in v.dims else v for k, v in surfaces.items()}
+    combined_err = xr.apply_ufunc(combined_psd_error, nominal["substrate"], nominal["solid"], eta, errors["substrate"],
+                                  errors["solid"], eta_err, dask="parallelized", output_dtypes=[float])
     hrms = xr.apply_ufunc(hrms_from_psd, q, combined, input_core_dims=[["q"], ["q"]], dask="parallelized", output_dtypes=[float])
     slope = xr.apply_ufunc(rms_slope_from_psd, q, combined, input_core_dims=[["q"], ["q"]], dask="parallelized", output_dtypes=[float])
     ds = xr.Dataset(
         {"psd_substrate": surfaces["substrate"], "psd_solid": surfaces["solid"], "psd_combined": combined,
-         "hrms_combined": hrms, "rms_slope_combined": slope},
+         "hrms_combined": hrms, "rms_slope_combined": slope, "psd_substrate_error": errors["substrate"],
+         "psd_solid_error": errors["solid"], "psd_combined_error": combined_err.transpose(..., "q")},
     )
     ds.attrs["q_lower_cutoff"] = float(q_values[0])
     return ds
@@ -146,27 +199,37 @@ def _files(name: str) -> FileInput:
     def options(params):
         spec = params[name]
         return dict(key=name, convention=spec["convention"], columns=spec["columns"], q_unit=spec["q_unit"],
-                    value_unit=spec["C_unit"], variable=spec["variable"],
+                    value_unit=spec["C_unit"], variable=spec["variable"], select=spec["select"],
                     convention_units={k: unit for k, (unit, _) in CONVENTIONS.items()})
 
     return FileInput(f"{name}.path", reader="spectrum", options=options)
 
 
-register(
+STAGE = register(
     Stage(
         name="psd",
-        version="1",
+        version="2",
         compute=compute_psd,
-        params=("substrate", "solid", "interface.eta", "grid.q_min", "grid.q_max", "numerics.points_per_decade"),
+        params=("substrate", "solid", "interface.eta", "grid.q_min", "grid.q_max", "numerics.points_per_decade",
+                "bands.draws", "bands.seed"),
+        # a measured surface's spectrum comes from the topography stage: of it, only how to extend it
+        reads=surface_reads({"topography": ("extend",), "container": ("extend",)}),
         files=(_files("substrate"), _files("solid")),
         requires=("topography",),
         needed=lambda values: ("topography",) if needs_topography(values) else (),
+        validate=validate_psd,
+        point_bytes=lambda params, wanted, upstream: 8 * 8 * (upstream["psd"].sizes["q"] if "psd" in upstream else 64),
         outputs={
             "psd_substrate": Var("m^4", "power spectral density of the substrate (C1, Persson convention)"),
             "psd_solid": Var("m^4", "power spectral density of the solid (C2, Persson convention)"),
             "psd_combined": Var("m^4", "combined power spectral density C(q) of the pair"),
             "hrms_combined": Var("m", "rms roughness of the combined surface (from the PSD)"),
             "rms_slope_combined": Var("1", "rms slope of the combined surface (from the PSD)"),
+            "psd_substrate_error": Var("m^4", "statistical standard error of C1 on the grid (0: analytic or no errors "
+                                       "known)"),
+            "psd_solid_error": Var("m^4", "statistical standard error of C2 on the grid (0: analytic or no errors known)"),
+            "psd_combined_error": Var("m^4", "standard error of the combined PSD, linear propagation of the errors of "
+                                      "C1, C2 and eta (measured spectra)"),
         },
         doc="C1(q), C2(q) on a log-spaced q grid and the combined C(q, eta) (eq 52).",
     )

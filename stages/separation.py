@@ -17,13 +17,14 @@ from roughcontact.physics.separation import (
     mean_separation,
     separation_moments,
     separation_node_count,
+    power_J,
     separation_nodes,
     small_pressure_law,
-    yang_persson_J,
 )
 from roughcontact.stage import (
     Figure,
     Param,
+    Preview,
     Section,
     Stage,
     StageInput,
@@ -35,7 +36,7 @@ from roughcontact.stage import (
 )
 
 from .figures.separation import figure_separation
-from .shared import E_STAR, MATERIAL_KEYS, e_star, zeta_values
+from .shared import CORRECTION_KEYS, E_STAR, MATERIAL_KEYS, area_correction, e_star, zeta_preview, zeta_values
 
 register_section(
     Section(
@@ -43,8 +44,10 @@ register_section(
         (
             Param("alpha", "quantity", "", default=0.45, lo=0.0, hi=1.0, lo_open=True,
                   doc="Persson's gamma in eq 57 (0 < alpha <= 1; ~0.4-0.5)"),
-            Param("refinement", "choice", default="none", choices=tuple(REFINEMENTS),
-                  doc="'none' (eq 57) or 'yang_persson' (alpha -> alpha + 3(1 - alpha) P^2)"),
+            Param("refinement", "choice", default="none", choices=(*REFINEMENTS, "contact"),
+                  doc="'none' (eq 57), 'yang_persson' (alpha -> alpha + 3(1 - alpha) P^2), 'wang_mueser' "
+                      "(alpha -> alpha - (2/3) P^2 + 5 (11/9 - alpha) P^4) or 'contact': the one of contact.correction "
+                      "with its gamma as alpha (persson: 'none' with this alpha)"),
         ),
         doc="the mean interfacial separation stage",
     )
@@ -75,12 +78,30 @@ def _checked_alpha(inp: StageInput) -> float:
     return alpha
 
 
+def separation_variant(inp: StageInput) -> tuple[float, str]:
+    """(alpha, refinement) of eq 57: the scene's, or with refinement "contact" the contact stage's
+    correction (yang_persson, wang_mueser) with its gamma as alpha; persson keeps "none"."""
+    alpha = _checked_alpha(inp)
+    refinement = inp["separation.refinement"]
+    if refinement != "contact":
+        return alpha, refinement
+    name, gamma = area_correction(inp)
+    return (alpha, "none") if name == "persson" else (gamma, name)
+
+
+def validate_separation(inp: StageInput) -> Preview:
+    """Before anything computes: the magnifications lie on the psd stage's q grid (and, with
+    refinement "contact", the contact correction's gamma is usable)."""
+    if inp["separation.refinement"] == "contact":
+        area_correction(inp)
+    return zeta_preview(inp, inp.upstream["psd"])
+
+
 def compute_separation(inp: StageInput) -> xr.Dataset:
     psd = inp.upstream["psd"]
     q = psd["q"].values
     E_star = e_star(inp)
-    alpha = _checked_alpha(inp)
-    refinement = inp["separation.refinement"]
+    alpha, refinement = separation_variant(inp)
     zetas = zeta_values(inp, q)
     zeta = xr.DataArray(zetas, dims=("zeta",))
     numerics = {"panels_per_decade": inp["numerics.separation_panels_per_decade"],
@@ -130,11 +151,23 @@ def compute_separation(inp: StageInput) -> xr.Dataset:
     return ds
 
 
+def _point_bytes(params, wanted, upstream) -> int:
+    """Working memory per sweep point: a few float64 temporaries over the quadrature nodes (about
+    order x (q nodes + depth x panels per decade); ``upstream`` holds results or previews)."""
+    if "psd" not in upstream or "q" not in upstream["psd"].sizes:
+        return 512
+    panels = int(np.ceil(float(params["numerics.separation_depth"]) * params["numerics.separation_panels_per_decade"]))
+    nodes = (int(upstream["psd"].sizes["q"]) + panels + 1) * int(params["numerics.separation_gauss_points"])
+    return 8 * 6 * nodes
+
+
 def _beta_attrs(refinement: str) -> dict:
+    extra = {"none": "", "yang_persson": " times exp(3 (1 - alpha) J2(0) / alpha), J2(0) = %.10f (Yang-Persson)"
+             % float(power_J(0.0, 2)),
+             "wang_mueser": " times exp(sum_k c_k Jk(0) / alpha), c_2 = -2/3, c_4 = 5 (11/9 - alpha), "
+                            "J2(0) = %.10f, J4(0) = %.10f" % (float(power_J(0.0, 2)), float(power_J(0.0, 4)))}
     return {
-        "formula": "beta = eps exp(-int q^2 C w ln w dq / int q^2 C w dq), eps = exp(-gamma_Euler/2)"
-                   + (" times exp(3 (1 - alpha) J(0) / alpha), J(0) = %.10f (Yang-Persson)" % float(yang_persson_J(0.0))
-                      if refinement == "yang_persson" else ""),
+        "formula": "beta = eps exp(-int q^2 C w ln w dq / int q^2 C w dq), eps = exp(-gamma_Euler/2)" + extra[refinement],
         "epsilon": EPSILON,
         "sign_note": "eq 60 of the seed lost the minus sign in the exponent; restored here (docs/theory.md, section 'Separation')",
         "nan_reason": "beta is NaN where the combined PSD is identically zero up to zeta qL (e.g. eta = 1 with "
@@ -143,13 +176,16 @@ def _beta_attrs(refinement: str) -> dict:
     }
 
 
-register(
+STAGE = register(
     Stage(
         name="separation",
         version="1",
         compute=compute_separation,
+        validate=validate_separation,
+        unchunked=("zeta",),
         requires=("psd",),
-        params=(*MATERIAL_KEYS, "load.p", "contact.zeta", "separation.alpha", "separation.refinement", *_NUMERICS),
+        params=(*MATERIAL_KEYS, "load.p", "contact.zeta", "separation.alpha", "separation.refinement", *_NUMERICS,
+                *CORRECTION_KEYS),
         outputs={
             "mean_separation": Var("m", "mean interfacial separation u(p) (eq 57)"),
             "separation_u0": Var("m", "decay length u0 of the small-pressure law p = beta E* exp(-u/u0) (eq 59)"),
@@ -160,5 +196,6 @@ register(
         doc="Mean interfacial separation u(p, zeta, eta) (eq 57) and its small-pressure law u0, beta (eqs 59-60).",
         main_outputs=("mean_separation",),
         tolerance=1e-4,
+        point_bytes=_point_bytes,
     )
 )

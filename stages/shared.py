@@ -13,8 +13,9 @@ from __future__ import annotations
 import numpy as np
 
 from roughcontact.physics.contact import effective_modulus
+from roughcontact.physics.corrections import CORRECTIONS, DEFAULT_GAMMA, check_gamma
 from roughcontact.physics.spectra import CONVENTIONS
-from roughcontact.stage import Param, Section, UserError, Var, register_coords, register_params, register_section
+from roughcontact.stage import Param, Preview, Section, UserError, Var, register_coords, register_params, register_section
 
 # ----------------------------------------------------------------------------------------
 # Coordinates written by several stages
@@ -28,8 +29,12 @@ register_coords(
     hrms_substrate=Var("m", "rms roughness of the substrate"),
     hrms_solid=Var("m", "rms roughness of the solid"),
     v=Var("m/s", "sliding velocity"),
-    T=Var("K", "temperature"),
+    # CF has no standard name for the temperature of a solid (its temperature names are of the air, sea,
+    # soil, ...); CF-1.11's units_metadata says it is a temperature on its scale, not a difference
+    T=Var("K", "temperature", attrs={"units_metadata": "temperature: on_scale"}),
     omega=Var("rad/s", "angular frequency"),
+    draw=Var("1", "spectrum draw: 0 = the measured spectrum, 1..N = spectra drawn within its statistical band",
+             standard_name="realization"),
 )
 
 #: E*, stored by the stages whose results are read against it (p/E*)
@@ -51,10 +56,27 @@ def zeta_values(inp, q: np.ndarray) -> np.ndarray:
     if isinstance(zeta, str):
         return q / q[0]
     zeta = np.atleast_1d(np.asarray(zeta, dtype=float))
-    top = q[-1] / q[0]
+    _check_zeta(zeta, q[-1] / q[0])
+    return zeta
+
+
+def _check_zeta(zeta: np.ndarray, top: float) -> None:
     if np.any(zeta > top * (1 + 1e-12)):
         raise UserError(f"magnification {zeta.max():g} beyond the q grid (zeta <= q_max/qL = {top:.6g})", key="contact.zeta")
-    return zeta
+
+
+def zeta_preview(inp, psd) -> Preview:
+    """Before anything computes: the magnifications ``[contact] zeta`` asks for (their number, and
+    their values where known), checked against the q grid of the psd stage's ``psd`` preview."""
+    zeta = inp["contact.zeta"]
+    if isinstance(zeta, str):
+        q = psd.coords.get("q")
+        return Preview(sizes={"zeta": int(psd.sizes["q"])}, coords={"zeta": q / q[0]} if q is not None else {},
+                       keys={"zeta": "numerics.points_per_decade"})
+    zeta = np.atleast_1d(np.asarray(zeta, dtype=float))
+    lo, hi = psd.ranges["q"]
+    _check_zeta(zeta, hi / lo)
+    return Preview(sizes={"zeta": int(zeta.size)}, coords={"zeta": zeta}, keys={"zeta": "contact.zeta"})
 
 
 # ----------------------------------------------------------------------------------------
@@ -74,9 +96,15 @@ def is_topography(spec) -> bool:
     return spec is not None and spec.get("kind") == "topography"
 
 
+def is_measured(spec) -> bool:
+    """Whether a surface section is measured height data the topography stage analyses: kind
+    'topography' (files) or 'container' (a contact.engineering container)."""
+    return spec is not None and spec.get("kind") in ("topography", "container")
+
+
 def needs_topography(values) -> bool:
-    """Whether a scene (its section values) has a surface of kind 'topography'."""
-    return any(is_topography(values.get(name)) for name in SURFACES)
+    """Whether a scene (its section values) has a surface of kind 'topography' or 'container'."""
+    return any(is_measured(values.get(name)) for name in SURFACES)
 
 
 def _check_surface(values: dict, key: str) -> None:
@@ -109,6 +137,8 @@ PSD_FILE_PARAMS = (
     Param("hurst", "quantity", "", default=0.5, lo=0.0, hi=1.0, lo_open=True,
           doc="Hurst exponent assumed by the '1d' (profile) conversion"),
     Param("variable", "str", default=None, doc="NetCDF: name of the PSD variable (default: the only one over q)"),
+    Param("select", "table", default=None,
+          doc="NetCDF: the slice of a PSD variable with more dimensions than q, e.g. { eta = 0.0 } for psd_combined"),
     Param("extend", "choice", default="none", choices=("none", "power_law", "zero"),
           doc="how to extend beyond the file's q range (none: error)"),
 )
@@ -140,6 +170,27 @@ TOPOGRAPHY_PARAMS = (
           doc="how the psd stage extends the measured PSD beyond its q range (none: error)"),
 )
 
+CONTAINER_PARAMS = (
+    Param("container", "path", doc="contact.engineering container (ZIP with the measurements and index.json / meta.yml); "
+          "units, sizes, height scale, detrending and reliability cutoffs come from its metadata"),
+    Param("surface", "str", default=None, doc="which surface of the container (by name) when it holds several"),
+    Param("detrend", "choice", default=None, choices=tuple(DETREND_DEGREE),
+          doc="polynomial removed before the FFT (default: the measurement's detrend_mode, else mean if periodic, else plane)"),
+    *(p for p in TOPOGRAPHY_PARAMS if p.name in ("analysis", "window", "hurst", "extend")),
+)
+
+#: the keys of a measured surface (kind "topography") that reading and preparing its maps takes
+#: (units, sizes, detrending, window, analysis, reliability cutoffs); ``extend`` and ``hurst`` are not among them
+MAP_KEYS = ("files", "height_unit", "size_x", "size_y", "periodic", "analysis", "detrend", "window", "tip_radius",
+            "resolution", "q_reliable")
+#: the same for a contact.engineering container (kind "container"), whose metadata gives the rest
+CONTAINER_KEYS = ("container", "surface", "detrend", "analysis", "window")
+
+
+def surface_reads(by_kind: dict) -> dict:
+    """A stage's ``reads`` for both surface sections: the same keys of each per kind."""
+    return {name: dict(by_kind) for name in SURFACES}
+
 
 def _surface_section(name: str, doc: str) -> Section:
     return Section(
@@ -148,7 +199,7 @@ def _surface_section(name: str, doc: str) -> Section:
         optional=True,
         discriminator="kind",
         variants={"self_affine": SELF_AFFINE_PARAMS, "psd_file": PSD_FILE_PARAMS, "topography": TOPOGRAPHY_PARAMS,
-                  "smooth": ()},
+                  "container": CONTAINER_PARAMS, "smooth": ()},
         check=_check_surface,
     )
 
@@ -195,6 +246,32 @@ register_section(
         doc="the magnifications at which contact and separation are computed",
     )
 )
+#: the contact-area correction (docs/theory.md, "Contact-area corrections"); read by contact,
+#: separation (refinement "contact"), friction and bem
+register_params(
+    "contact",
+    Param("correction", "choice", default="persson", choices=tuple(CORRECTIONS),
+          doc="contact-area theory: persson (eq 19, the seed), yang_persson (S = gamma + (1 - gamma) (A/A0)^2) "
+              "or wang_mueser (S = gamma - (2/9) (A/A0)^2 + (11/9 - gamma) (A/A0)^4): dV = S dV_full along zeta"),
+    Param("gamma", "quantity", "", default=None, lo=0.0, hi=1.0, lo_open=True,
+          doc="gamma of the correction (default: the published value, 0.45 yang_persson, 5/9 wang_mueser)"),
+)
+CORRECTION_KEYS = ("contact.correction", "contact.gamma")
+
+
+def area_correction(inp) -> tuple[str, float | None]:
+    """The scene's contact-area correction and its gamma (the published one unless given),
+    checked: S(A/A0) > 0 on [0, 1]."""
+    name = inp["contact.correction"]
+    gamma = inp["contact.gamma"]
+    gamma = DEFAULT_GAMMA[name] if gamma is None else float(gamma)
+    try:
+        check_gamma(name, gamma)
+    except ValueError as exc:
+        raise UserError(str(exc), key="contact.gamma") from None
+    return name, (None if name == "persson" else gamma)
+
+
 register_section(
     Section(
         "grid",
@@ -205,6 +282,31 @@ register_section(
                   doc="highest wavenumber (default: highest of the surfaces)"),
         ),
         doc="the wavenumber grid shared by all stages",
+    )
+)
+
+
+def _check_bands(values: dict, key: str) -> None:
+    """``draws = N`` becomes the sweep dimension draw = 0..N (0: the measured spectrum)."""
+    n = values.get("draws")
+    if isinstance(n, np.ndarray) or float(n) != int(n):
+        raise UserError(f"expected a whole number of draws, got {n!r}", key=f"{key}.draws")
+    values["draws"] = np.arange(int(n) + 1, dtype=float) if int(n) > 0 else 0.0
+
+
+register_section(
+    Section(
+        "bands",
+        (
+            Param("draws", "sweep", "", default=0, lo=0, hi=100000, dim="draw",
+                  doc="spectra drawn within the measured PSDs' statistical band (0: none); a sweep dimension "
+                      "'draw' = 0..N that every downstream stage carries (0 = the measured spectrum)"),
+            Param("level", "quantity", "", default=0.9, lo=0.0, hi=1.0, lo_open=True, hi_open=True,
+                  doc="probability content of the bands (quantiles (1 - level)/2, 0.5, (1 + level)/2 of the draws)"),
+            Param("seed", "int", default=0, lo=0, doc="random seed of the draws (draw d uses the stream (seed, surface, d))"),
+        ),
+        doc="uncertainty bands: predictions from spectra drawn within the measured spectra's statistical band",
+        check=_check_bands,
     )
 )
 register_params(

@@ -21,11 +21,13 @@ from roughcontact.physics.estimators import (
     pooled_coherence,
     second_surface_hurst,
 )
-from roughcontact.stage import Figure, Param, Stage, StageInput, UserError, Var, register, register_params
+from roughcontact.physics.lattice import binned_wavenumbers
+from roughcontact.stage import Figure, Param, Preview, Stage, StageInput, UserError, Var, register, register_params
 
 from .figures.topography import figure_coherence, figure_measured_psd
-from .maps import prepare_map, process_map, topography_files
-from .shared import SURFACES, is_topography
+from .maps import topography_files
+from .measured import container_files, merged_psd, mode_factor, prepared_files
+from .shared import CONTAINER_KEYS, MAP_KEYS, SURFACES, is_measured, surface_reads
 
 register_params(
     "numerics",
@@ -38,8 +40,11 @@ def _spectra(p, edges, spec, other=None):
     """Binned spectra of one prepared file (and of its partner ``other`` of the second surface)."""
     h2 = other["h"] if other is not None else None
     if p["analysis"] == "profiles":
-        return binned_spectra_profiles(p["h"], p["sizes"][0], edges, p["q_max"], spec["hurst"], h2)
-    return binned_spectra_area(p["h"], p["sizes"][0], p["sizes"][1], edges, p["q_max"], h2)
+        s = binned_spectra_profiles(p["h"], p["sizes"][0], edges, p["q_max"], spec["hurst"], h2)
+    else:
+        s = binned_spectra_area(p["h"], p["sizes"][0], p["sizes"][1], edges, p["q_max"], h2)
+    s["n"] = s["n"] / mode_factor(p, edges)  # a window correlates neighbouring modes
+    return s
 
 
 def _describe(p, spec):
@@ -47,6 +52,8 @@ def _describe(p, spec):
     d = {k: p[k] for k in ("path", "format", "unit", "size_source", "periodic", "detrend", "window", "analysis", "cutoff")}
     d.update(shape=list(p["h"].shape), sizes_m=list(p["sizes"]), q_range_per_m=[p["q_min"], p["q_max"]],
              rms_height_after_detrend_m=p["rms"])
+    if "member" in p:  # a measurement of a contact.engineering container
+        d["container_measurement"] = p["member"]
     if p["analysis"] == "profiles":
         d["isotropic_conversion"] = (f"C(q) = c(H) C1D(q) / q with c(H) = Gamma(1+H)/(2 pi^1.5 Gamma(H+1/2)), "
                                      f"H = {spec['hurst']:g}; exact only for an isotropic self-affine surface with "
@@ -83,27 +90,61 @@ def _paired_spectra(prepared, specs, edges):
 
 def _surface_vars(name, spectra, described, bpd):
     """The merged PSD of one surface with its error, mean wavenumbers and modes per bin."""
-    q, C, n, err = merge_spectra(spectra)
+    q, C, n, err, ratio = merged_psd(spectra)
     common = {"surface": name, "files": json.dumps(described),
               "convention": "Persson, C(q) = (2 pi)^-2 int d^2x <hh> e^-iqx",
-              "radial_average": f"mean over Fourier modes with |q| in log bins, {bpd} per decade"}
-    estimate = "C / sqrt(n): Gaussian random-phase modes; window-correlated and correlated profiles make it an underestimate"
+              "radial_average": f"mean over Fourier modes with |q| in log bins, {bpd} per decade",
+              "merge": "in each bin, the files (measurements) with modes there averaged with weights n, their effective "
+                       "independent modes (inverse-variance weights); each file's range in 'files' (q_range_per_m)"}
+    estimate = ("C / sqrt(n), n the independent modes (Gaussian random-phase statistics; a window's correlation "
+                "of neighbouring modes counted), times the Birge ratio where the files disagree beyond it (chi-square "
+                "test at 1 %); correlated profiles make it an underestimate")
     return {f"psd_{name}_measured": (C, common), f"psd_{name}_measured_error": (err, {"estimate": estimate}),
-            f"q_{name}_measured": (q, {}), f"modes_{name}": (n, {})}, n > 0
+            f"q_{name}_measured": (q, {}), f"modes_{name}": (n, {}), f"psd_{name}_measured_spread": (ratio, {})}, n > 0
+
+
+def _prepared(inp: StageInput):
+    """The checked and prepared files of each measured surface, the bin edges and the pairing
+    (why the files cannot be paired, or None)."""
+    specs = {name: inp[name] for name in SURFACES if is_measured(inp[name])}
+    if not specs:
+        raise UserError("no surface has kind = 'topography' or 'container'", key="substrate.kind")
+    prepared = {name: prepared_files(name, spec, inp.files) for name, spec in specs.items()}
+    q_lo = min(p["q_min"] for ps in prepared.values() for p in ps)
+    q_hi = max(p["q_max"] for ps in prepared.values() for p in ps)
+    edges = log_bin_edges(q_lo, q_hi, inp["numerics.topography_bins_per_decade"])
+    pair_note = _pairing_problem(prepared["substrate"], prepared["solid"]) if len(specs) == 2 else None
+    return specs, prepared, edges, pair_note
+
+
+def validate_topography(inp: StageInput) -> Preview:
+    """Before anything computes: every file read, checked and prepared (units, sizes, missing
+    points, flat maps, reliable band); returns the measured wavenumber range of each surface
+    (from the Fourier lattice alone, no FFT) and whether the pair gives a coherence."""
+    specs, prepared, edges, pair_note = _prepared(inp)
+    paired = len(specs) == 2 and pair_note is None
+    ranges, bins = {}, np.zeros(edges.size - 1, bool)
+    for name in specs:
+        other = prepared["solid" if name == "substrate" else "substrate"] if paired else [None] * len(prepared[name])
+        lattice = [binned_wavenumbers(p["h"].shape, p["sizes"], edges, min(p["q_max"], r["q_max"]) if r else p["q_max"],
+                                      profiles=p["analysis"] == "profiles") for p, r in zip(prepared[name], other)]
+        q, _, n, _ = merge_spectra([{"n": n, "q": q, "C11": np.zeros_like(q)} for n, q in lattice])
+        bins |= n > 0
+        if np.count_nonzero(n > 0) < 2:
+            raise UserError("the measured maps give fewer than two wavenumber bins",
+                            key=f"{name}.{'container' if specs[name]['kind'] == 'container' else 'files'}")
+        ranges[f"q_{name}_measured"] = (float(np.nanmin(q)), float(np.nanmax(q)))
+    variables = {f"{kind}_{name}_measured" for name in specs for kind in ("psd", "q")}
+    variables |= {"coherence", "cross_psd_measured", "coherence_error"} if paired else set()
+    pairing = "paired" if paired else f"not paired: {pair_note}" if pair_note else "not paired: one surface only"
+    return Preview(sizes={"q_bin": int(np.ptp(np.flatnonzero(bins))) + 1}, ranges=ranges,
+                   variables=frozenset(variables), attrs={"pairing": pairing})
 
 
 def compute_topography(inp: StageInput) -> xr.Dataset:
     bpd = inp["numerics.topography_bins_per_decade"]
-    specs = {name: inp[name] for name in SURFACES if is_topography(inp[name])}
-    if not specs:
-        raise UserError("no surface has kind = 'topography'", key="substrate.kind")
-    prepared = {name: [process_map(prepare_map(name, spec, t, i), spec) for i, t in enumerate(inp.files[f"{name}.files"])]
-                for name, spec in specs.items()}
-    q_lo = min(p["q_min"] for ps in prepared.values() for p in ps)
-    q_hi = max(p["q_max"] for ps in prepared.values() for p in ps)
-    edges = log_bin_edges(q_lo, q_hi, bpd)
+    specs, prepared, edges, pair_note = _prepared(inp)
     centres = np.sqrt(edges[1:] * edges[:-1])
-    pair_note = _pairing_problem(prepared["substrate"], prepared["solid"]) if len(specs) == 2 else None
     paired = len(specs) == 2 and pair_note is None
     if paired:
         spectra = _paired_spectra(prepared, specs, edges)
@@ -130,16 +171,25 @@ def compute_topography(inp: StageInput) -> xr.Dataset:
 register(
     Stage(
         name="topography",
-        version="1",
+        version="2",
         compute=compute_topography,
         params=("substrate", "solid", "numerics.topography_bins_per_decade"),
-        files=(topography_files("substrate"), topography_files("solid")),
+        # of a measured surface the map keys and the line-scan H; of any other surface only its kind
+        reads=surface_reads({"topography": (*MAP_KEYS, "hurst"), "container": (*CONTAINER_KEYS, "hurst"),
+                             "*": ()}),
+        validate=validate_topography,
+        files=(topography_files("substrate"), topography_files("solid"), container_files("substrate"),
+               container_files("solid")),
         outputs={
             **{f"psd_{s}_measured": Var("m^4", f"measured PSD of the {s} (Persson convention)") for s in SURFACES},
             **{f"psd_{s}_measured_error": Var("m^4", f"statistical standard error of the measured PSD of the {s}")
                for s in SURFACES},
             **{f"q_{s}_measured": Var("1/m", f"mean wavenumber of the {s}'s Fourier modes in the bin") for s in SURFACES},
-            **{f"modes_{s}": Var("1", f"independent Fourier modes of the {s} in the bin") for s in SURFACES},
+            **{f"modes_{s}": Var("1", f"independent Fourier modes of the {s} in the bin (a window's correlations "
+                                      "counted)") for s in SURFACES},
+            **{f"psd_{s}_measured_spread": Var("1", f"Birge ratio sqrt(chi^2/(k-1)) of the spread between the {s}'s "
+                                              "k files in the bin (about 1 when they agree within their errors)")
+               for s in SURFACES},
             "cross_psd_measured": Var("m^4", "measured cross-spectrum Re C12 of the pair (Persson convention)"),
             "coherence": Var("1", "measured coherence eta(q) = Re C12 / sqrt(C11 C22) (eq 41)"),
             "coherence_error": Var("1", "statistical standard error of the coherence, (1 - eta^2) / sqrt(2 n)"),

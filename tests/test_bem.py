@@ -328,7 +328,7 @@ def test_stage_physics_and_comparison(run_scene):
     hrms = ds["bem_hrms_combined"].sel(eta=0.0)
     assert np.all(np.abs(hrms / np.sqrt(2e-18) - 1) < 0.3)
     fig = figure_bem_comparison({"base": {"bem": ds}})
-    assert len(fig.axes) == 3 and len(fig.axes[0].lines) >= 3
+    assert len(fig.axes) == 4 and len(fig.axes[0].lines) >= 3  # A/A0, u, and each variant's two ratios
 
 
 def test_stage_grid_refinement_same_surfaces(run_scene, tmp_path):

@@ -201,8 +201,7 @@ def _stage_at(sc, v):
 
     values = sc.values
     get = lambda key: values[key.partition(".")[0]] if "." not in key else values[key.partition(".")[0]][key.partition(".")[2]]  # noqa: E731
-    psd = ps.compute_psd(StageInput(params={k: get(k) for k in (
-        "substrate", "solid", "interface.eta", "grid.q_min", "grid.q_max", "numerics.points_per_decade")}))
+    psd = ps.compute_psd(StageInput(params={k: get(k) for k in ps.STAGE.params}))
     mod = md.compute_modulus(StageInput(params={"modulus": values["modulus"],
                                                "numerics.modulus_points_per_decade": values["numerics"]["modulus_points_per_decade"]}))
     params = {k: get(k) for k in fr.STAGE.params}

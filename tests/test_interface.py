@@ -99,12 +99,13 @@ def test_stiffness_tends_to_p_over_u0_at_small_load(run_scene):
     np.testing.assert_allclose(ds["small_load_stiffness"].sel(zeta=200.0).squeeze(), ds["p"] / u0, rtol=1e-14)
 
 
-def test_yang_persson_stiffness_is_the_derivative_of_its_separation():
+@pytest.mark.parametrize("refinement", ["yang_persson", "wang_mueser"])
+def test_refined_stiffness_is_the_derivative_of_its_separation(refinement):
     q = log_grid(QL, Q1, 50, knots=(Q0,))
     C = psd(q, plateau(1e-9))
     s, weight, count, _, s_tail, q_tail = separation_nodes(q, C, np.array([Q1]), 4, 6, 10.0)
     p = E_STAR * np.logspace(-8, -1, 8)
-    kw = dict(E_star=E_STAR, alpha=ALPHA, refinement="yang_persson")
+    kw = dict(E_star=E_STAR, alpha=ALPHA, refinement=refinement)
     D, K = stiffness_from_psd(q, C, np.array([Q1]), p, panels_per_decade=4, order=6, **kw)
     h = 1e-4
     du = mean_separation(p * (1 + h), s, weight, count, s_tail, q_tail, **kw) - \

@@ -12,7 +12,7 @@ from roughcontact.stage import StageInput, stages
 
 from conftest import SURFACE, make_scene
 
-PROVENANCE = ("history", "date_created", "git_commit", "scene")
+PROVENANCE = ("history", "date_created", "git_commit", "scene", "data_checksum")
 
 
 def _strip(ds):

@@ -93,7 +93,7 @@ def smooth_psd(ppd):
 # ----------------------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("refinement", ["none", "yang_persson"])
+@pytest.mark.parametrize("refinement", ["none", "yang_persson", "wang_mueser"])
 def test_small_pressure_asymptote(refinement):
     """u(p) -> u0 ln(beta E*/p) as p -> 0: within 1e-4 relative at p/E* = 1e-7 (every case)."""
     p = 1e-7 * E_STAR
@@ -193,7 +193,7 @@ def test_identical_surfaces_give_zero_separation_and_nan_beta():
 # ----------------------------------------------------------------------------------------
 
 
-def brute_force_u(p, zeta, C0, alpha=ALPHA, yang_persson=False, epsrel=1e-11):
+def brute_force_u(p, zeta, C0, alpha=ALPHA, yang_persson=False, epsrel=1e-11, factor=None):
     """Eq 57 as written: sqrt(pi) alpha int dq q^2 C w int_p^inf dp'/p' S exp(-(w p'/E*)^2),
     S = 1 (or alpha -> alpha + 3(1-alpha) erf^2 inside), both integrals by quad; w analytic for
     the pure power law; q = qL + t^2 so that quad sees no endpoint singularity."""
@@ -207,8 +207,10 @@ def brute_force_u(p, zeta, C0, alpha=ALPHA, yang_persson=False, epsrel=1e-11):
             return 0.0
         def f(lp):
             x = w * math.exp(lp) / E_STAR
-            factor = alpha + 3 * (1 - alpha) * math.erf(x) ** 2 if yang_persson else alpha
-            return factor * math.exp(-x * x)
+            if factor is not None:
+                return factor(math.erf(x)) * math.exp(-x * x)
+            weight = alpha + 3 * (1 - alpha) * math.erf(x) ** 2 if yang_persson else alpha
+            return weight * math.exp(-x * x)
         lo, mid = math.log(p), max(math.log(p), math.log(E_STAR / w)) + 4
         return (quad(f, lo, mid, epsabs=0, epsrel=epsrel / 10, limit=200)[0]
                 + quad(f, mid, math.inf, epsabs=0, epsrel=epsrel / 10)[0])
@@ -235,6 +237,17 @@ def test_yang_persson_agrees_with_brute_force():
     for p_rel in (1e-6, 1e-2):
         u = kernel_u(q, C, np.array([4 * QL]), p_rel * E_STAR, refinement="yang_persson")
         assert u[0] == pytest.approx(brute_force_u(p_rel * E_STAR, 4.0, C[0], yang_persson=True), rel=1e-6, abs=0)
+
+
+def test_wang_mueser_energy_factor_agrees_with_brute_force():
+    """S = a - (2/9) P^2 + (11/9 - a) P^4 in the energy: d(P S)/dP = a - (2/3) P^2 + 5 (11/9 - a) P^4
+    inside the p' integral, done by quad."""
+    q, C = seed_psd()
+    a = 5 / 9
+    for p_rel in (1e-6, 1e-2):
+        u = kernel_u(q, C, np.array([4 * QL]), p_rel * E_STAR, alpha=a, refinement="wang_mueser")
+        ref = brute_force_u(p_rel * E_STAR, 4.0, C[0], factor=lambda P: a - 2 / 3 * P**2 + 5 * (11 / 9 - a) * P**4)
+        assert u[0] == pytest.approx(ref, rel=1e-6, abs=0)
 
 
 def test_yang_persson_function_and_limits():

@@ -7,6 +7,8 @@ import numpy as np
 
 from roughcontact.stage import UserError
 
+from .common import DEFAULT_LEVEL, band_level, draw_band, nominal
+
 _ANGSTROM = 1e-10
 
 
@@ -16,9 +18,11 @@ def _per_model(ds):
     return [(str(ds["model"].values) if "model" in ds.coords else "", ds)]
 
 
-def _curve(ax_a, ax_b, ds, label, style, full=False, color=None):
+def _curve(ax_a, ax_b, ds, label, style, full=False, color=None, level=DEFAULT_LEVEL):
     """gamma_eff/Delta_gamma on ax_a and A/A0 on ax_b against the substrate hrms, closed at the
-    vanishing hrms (marked by a dotted line) when the dataset has it."""
+    vanishing hrms (marked by a dotted line) when the dataset has it; with spectrum draws, the
+    measured spectrum's curve and the band of the draws shaded."""
+    draws, ds = ds, nominal(ds)
     if "hrms_substrate" not in ds.dims:
         raise UserError("the adhesion figures need substrate.hrms as a sweep", key="substrate.hrms")
     h = ds["hrms_substrate"].values / _ANGSTROM
@@ -32,6 +36,10 @@ def _curve(ax_a, ax_b, ds, label, style, full=False, color=None):
         hp, gp, Ap = np.append(h, hv)[order], np.append(g, 0.0)[order], np.append(A, 0.0)[order]
     (line,) = ax_a.plot(hp, gp, style, color=color, label=label, markersize=4, markevery=list(np.flatnonzero(np.isin(hp, h))))
     ax_b.plot(hp, Ap, style, color=line.get_color(), label=label, markersize=4, markevery=list(np.flatnonzero(np.isin(hp, h))))
+    for ax, var, scale in ((ax_a, "gamma_eff_macroscopic", dg), (ax_b, "adhesive_contact_area_ratio", 1.0)):
+        band = draw_band(draws[var], level)
+        if band is not None:
+            ax.fill_between(h, band[0] / scale, band[1] / scale, color=line.get_color(), alpha=0.22, lw=0)
     if full:
         ax_a.plot(h, ds["gamma_eff_full_contact"].values / dg, "-.", color=line.get_color(), label="full contact")
     if "hrms_substrate_vanishing" in ds:
@@ -64,7 +72,8 @@ def figure_one_surface(results):
         ds = ds.isel(eta=0)
     fig, ax_a, ax_b = _axes("One rough surface (seed Fig. 1)")
     for k, (label, d) in enumerate(_per_model(ds)):
-        _curve(ax_a, ax_b, d, f"partial contact ({label})" if label else "partial contact", "-", full=(k == 0))
+        _curve(ax_a, ax_b, d, f"partial contact ({label})" if label else "partial contact", "-", full=(k == 0),
+               level=band_level(results))
     top = float(ds["gamma_eff_full_contact"].max() / ds["delta_gamma"])
     ax_a.set_ylim(0, max(1.02, 1.05 * top))
     ax_a.legend(fontsize=8)
@@ -81,9 +90,10 @@ def figure_two_surfaces(results):
         suffix = f" ({label})" if "model" in ds.dims else ""
         if "eta" in d.dims:
             for e in d["eta"].values:
-                _curve(ax_a, ax_b, d.sel(eta=e), f"eta = {e:+g}{suffix}", styles.get(float(e), "--"))
+                _curve(ax_a, ax_b, d.sel(eta=e), f"eta = {e:+g}{suffix}", styles.get(float(e), "--"),
+                       level=band_level(results))
         else:
-            _curve(ax_a, ax_b, d, f"pair{suffix}", "-")
+            _curve(ax_a, ax_b, d, f"pair{suffix}", "-", level=band_level(results))
     if "substrate_only" in results:
         for label, d in _per_model(results["substrate_only"]["adhesion"]):
             _curve(ax_a, ax_b, d, "substrate only" + (f" ({label})" if "model" in ds.dims else ""), "--", color="0.6")

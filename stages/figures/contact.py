@@ -6,7 +6,7 @@ import numpy as np
 
 from roughcontact.stage import UserError
 
-from .common import curve_cases
+from .common import band_level, band_note, band_on, curve_cases, line_with_band, nominal
 
 
 def _cases(results):
@@ -21,13 +21,17 @@ def figure_contact_area(results, zeta=4.0):
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(5.5, 4.2))
+    ax.set_xscale("log")
+    level, note = band_level(results), ""
     for (label, ds), marker in zip(_cases(results), "osx^dv"):
         ds = _at_zeta(ds, zeta)
         p = ds["p"].values / float(ds["E_star"])
-        ax.semilogx(p, ds["contact_area_ratio"].values, marker=marker, markersize=3, label=label)
+        line_with_band(ax, p, ds["contact_area_ratio"], level, marker=marker, markersize=3, label=label)
+        note = note or band_note(results, ds)
     ax.set_xlabel("p / E*")
     ax.set_ylabel("A / A0")
-    ax.set_title(f"Relative contact area, zeta = {zeta:g} (seed Fig. 3)")
+    ax.set_title(f"Relative contact area, zeta = {zeta:g} (seed Fig. 3)" + (f"\n{note}" if note else ""),
+                 fontsize=10 if note else None)
     ax.set_ylim(0, 1.02)
     ax.legend()
     fig.tight_layout()
@@ -45,7 +49,7 @@ def figure_stress_distribution(results, zeta=4.0):
         raise UserError("the scene does not ask for 'stress_distribution' (add it to outputs.variables)",
                         key="outputs.variables")
     E_star = float(base["E_star"])
-    ref = _at_zeta(cases[0][1], zeta)["contact_area_ratio"]
+    ref = nominal(_at_zeta(cases[0][1], zeta)["contact_area_ratio"])
     ref = ref.isel({d: 0 for d in ref.dims if d != "p"})
     picks = sorted({float(ref["p"][int(np.argmin(np.abs(ref.values - a)))]) for a in (0.1, 0.3, 0.6)})
     fig, axes = plt.subplots(1, len(picks), figsize=(4.2 * len(picks), 3.8), squeeze=False)
@@ -53,13 +57,15 @@ def figure_stress_distribution(results, zeta=4.0):
         right = 0.0
         for (label, ds), style in zip(cases, ("-", "--", ":", "-.", "-", "--")):
             ds = _at_zeta(ds, zeta)
-            d = ds["stress_distribution"].sel(p=p, method="nearest")
-            G = float(ds["G"])
-            if "p" in d["sigma"].dims:
-                d = d.assign_coords(sigma=d["sigma"])
+            draws = ds["stress_distribution"].sel(p=p, method="nearest")
+            d, G = nominal(draws), float(nominal(ds["G"]))
             if G > 0:
                 line, = ax.plot(d["sigma"].values / E_star, d.values * E_star, style, label=label)
                 right = max(right, (p + 5.0 * np.sqrt(G)) / E_star)
+                if "draw" in draws.dims:
+                    lo, hi = band_on(d["sigma"].values, draws["sigma"].values, draws.values, band_level(results))
+                    ax.fill_between(d["sigma"].values / E_star, lo * E_star, hi * E_star, color=line.get_color(),
+                                    alpha=0.22, lw=0)
             else:
                 ax.axvline(p / E_star, linestyle=style, color="0.3", label=f"{label} (full contact: delta)")
         ax.set_xlim(0, right or 2 * p / E_star)
@@ -67,6 +73,8 @@ def figure_stress_distribution(results, zeta=4.0):
         ax.set_title(f"p / E* = {p / E_star:.3g}")
     axes[0][0].set_ylabel("P(sigma) E*")
     axes[0][-1].legend(fontsize=8)
-    fig.suptitle(f"Stress distribution, zeta = {zeta:g} (seed Fig. 4)")
+    note = band_note(results, base)
+    fig.suptitle(f"Stress distribution, zeta = {zeta:g} (seed Fig. 4)" + (f"\n{note}" if note else ""),
+                 fontsize=10 if note else None)
     fig.tight_layout()
     return fig

@@ -6,12 +6,14 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from .common import band_level, band_note, draw_band, line_with_band, nominal
+
 
 def _first(da: xr.DataArray, keep: tuple[str, ...]) -> tuple[xr.DataArray, str]:
-    """Reduce every dimension but ``keep`` to its first value; say which in a note."""
+    """Reduce every dimension but ``keep`` (and the spectrum draws) to its first value; say which in a note."""
     notes = []
     for dim in list(da.dims):
-        if dim not in keep:
+        if dim not in keep and dim != "draw":
             value = da[dim].values[0]
             notes.append(f"{dim} = {value:.4g}" if dim != "T" else f"T = {value - 273.15:.4g} °C")
             da = da.isel({dim: 0})
@@ -46,11 +48,11 @@ def _friction_figure(results, which, etas, title, ylabel, logy=False):
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(5.8, 4.3))
+    ax.set_xscale("log")
     notes = set()
     for (label, da, note), marker in zip(_curves(results, which, etas), "o*+xsd"):
-        ax.semilogx(da["v"].values, da.values, marker=marker, markersize=4, label=label)
-        if note:
-            notes.add(note)
+        line_with_band(ax, da["v"].values, da, band_level(results), marker=marker, markersize=4, label=label)
+        notes |= {n for n in (note, band_note(results, da)) if n}
     ax.set_xlabel("sliding velocity v (m/s)")
     ax.set_ylabel(ylabel)
     ax.set_title(title + (f"\n({'; '.join(sorted(notes))})" if notes else ""), fontsize=10)
@@ -90,14 +92,19 @@ def figure_psds(results):
     psd = results["base"]["psd"]
     fig, axes = plt.subplots(1, 2, figsize=(10, 4.2))
     for ax, name, title in ((axes[0], "solid", "(a) elastic solid (rubber)"), (axes[1], "substrate", "(b) substrate")):
-        da, note = _first(psd[f"psd_{name}"], ("q",))
+        draws, note = _first(psd[f"psd_{name}"], ("q",))
+        da = nominal(draws)
         q = da["q"].values
         C = da.values
         mask = C > 0
+        band = draw_band(draws, band_level(results))
+        if band is not None and np.any(mask):
+            ax.fill_between(q[mask], band[0][mask], band[1][mask], color="C0", alpha=0.25, lw=0,
+                            label=band_note(results, draws))
         if not np.any(mask):
             ax.text(0.5, 0.5, "smooth", transform=ax.transAxes, ha="center")
         else:
-            ax.loglog(q[mask], C[mask], "-", label="C(q)")
+            ax.loglog(q[mask], C[mask], "-", color="C0", label="C(q)")
             H = da.attrs.get("H")
             if H is not None:
                 q0 = float(da.attrs.get("q0", q[mask][0]))

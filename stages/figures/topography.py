@@ -33,7 +33,8 @@ def figure_measured_psd(results):
         ax.loglog(q[ok], C[ok], "o", color=colour, ms=2.5, label=f"{name}: measured bins (band: 2 s.e.)")
         if "psd" in results["base"]:
             p = results["base"]["psd"]
-            ax.loglog(p["q"].values, p[f"psd_{name}"].values, "-", color=colour, lw=0.8, label=f"{name}: on the psd stage's q grid")
+            grid = p[f"psd_{name}"].isel(draw=0) if "draw" in p[f"psd_{name}"].dims else p[f"psd_{name}"]
+            ax.loglog(p["q"].values, grid.values, "-", color=colour, lw=0.8, label=f"{name}: on the psd stage's q grid")
     return _finish(fig, ax, "C(q) (m$^4$, Persson convention)", "Measured power spectral densities")
 
 

@@ -1,0 +1,140 @@
+"""Measured surfaces in the stage layer beyond single files, and their statistical errors.
+
+* ``kind = "container"``: the measurements of a contact.engineering container (read by the
+  engine's ``container`` reader) prepared like the files of ``kind = "topography"``, each with
+  its own units, detrending and reliability cutoff from the container's metadata.
+* The errors of the topography stage's binned PSDs: independent modes of windowed scans
+  (:func:`mode_factor`) and the spread between several measurements (:func:`merged_psd`).
+* For the psd stage: the errors on its q grid and the spectra (and coherences) drawn within
+  them, the sweep dimension ``draw`` of the uncertainty bands.
+
+Not a stage (it registers nothing). Kernels: :mod:`roughcontact.physics.uncertainty`. See
+docs/measured-data.md.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+
+from roughcontact.physics.estimators import merge_spectra
+from roughcontact.physics.preprocessing import hann_window_1d, hann_window_radial
+from roughcontact.physics.modes import window_mode_factor_area, window_mode_factor_profiles
+from roughcontact.physics.uncertainty import (
+    coherence_draws_on_grid,
+    coherence_error_on_grid,
+    psd_draws_on_grid,
+    psd_error_on_grid,
+    spread_inflation,
+)
+from roughcontact.stage import FileInput, UserError
+
+from .maps import measured_bins, prepare_map, process_map
+
+#: contact.engineering's detrend modes (SurfaceTopography) and the polynomial each removes
+DETREND_FROM_MODE = {"center": "mean", "height": "plane", "slope": "plane", "curvature": "curvature"}
+#: random streams of the draws, one per measured quantity
+STREAMS = {"substrate": 1, "solid": 2, "coherence": 3}
+
+
+def container_files(name: str) -> FileInput:
+    """The container of surface ``name`` (kind container), read by the engine's container reader."""
+
+    def options(params):
+        return dict(key=name, surface=params[name].get("surface"))
+
+    return FileInput(f"{name}.container", reader="container", options=options)
+
+
+def _member(name: str, spec: dict, topo, index: int, container) -> dict:
+    """One measurement of a container, prepared and processed with the settings its metadata gives."""
+    meta = topo.metadata
+    cut = meta.get("reliability_cutoff_m")
+    own = dict(spec, detrend=spec.get("detrend") or DETREND_FROM_MODE.get(meta.get("detrend_mode")),
+               q_reliable=2.0 * np.pi / cut if cut else None, tip_radius=None, resolution=None,
+               size_x=None, size_y=None, periodic=None)
+    try:
+        p = process_map(prepare_map(name, own, topo, index), own)
+    except UserError as exc:
+        raise UserError(exc.message, file=exc.file, key=f"{name}.container") from None
+    if p["cutoff"] == "given q_reliable":
+        p["cutoff"] = f"container metadata: {meta['reliability_cutoff_source']}"
+    p["member"] = {"container": str(container.path), "surface": container.surface, **meta}
+    return p
+
+
+def prepared_files(name: str, spec: dict, files) -> list[dict]:
+    """The prepared, processed scans of measured surface ``name`` (:func:`roughcontact.stages.maps.process_map`):
+    its files (kind topography) or the measurements of its container (kind container)."""
+    if spec["kind"] == "container":
+        container = files[f"{name}.container"]
+        return [_member(name, spec, t, i, container) for i, t in enumerate(container.measurements)]
+    return [process_map(prepare_map(name, spec, t, i), spec) for i, t in enumerate(files[f"{name}.files"])]
+
+
+def mode_factor(p: dict, edges: np.ndarray):
+    """Per bin, by how much the window of scan ``p`` divides its independent modes (1: no window)."""
+    if p["window"] != "hann":
+        return 1.0
+    h, sizes = p["h"], p["sizes"]
+    if p["analysis"] == "profiles":
+        return window_mode_factor_profiles(h.shape[0], sizes[0], edges, p["q_max"], hann_window_1d(h.shape[0]))
+    return window_mode_factor_area(*h.shape, *sizes, edges, p["q_max"], hann_window_radial(*h.shape, *sizes))
+
+
+def merged_psd(spectra: list[dict], key: str = "C11"):
+    """The merged PSD of several scans of one surface with its standard error: C / sqrt(n)
+    (n: effective independent modes), inflated where the scans disagree beyond it.
+
+    Returns
+    -------
+    q, C, n, err, ratio : arrays over the bins
+        As :func:`roughcontact.physics.estimators.merge_spectra`, and the Birge ratio of the
+        spread between the scans (NaN where fewer than two have modes).
+    """
+    q, C, n, err = merge_spectra(spectra, key)
+    values = np.stack([s[key] for s in spectra])
+    ratio, inflation = spread_inflation(values, np.stack([s["n"] for s in spectra]), C)
+    return q, C, n, err * inflation, ratio
+
+
+def _modes(C, err):
+    """Effective independent modes behind a PSD estimate with standard error ``err``."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(err > 0, (C / np.where(err > 0, err, 1.0)) ** 2, 1e12)
+
+
+def psd_error_grid(ds: xr.Dataset, name: str, q_grid: np.ndarray, how: str) -> np.ndarray:
+    """Standard error (m^4) of the measured PSD of ``name`` on the psd stage's grid."""
+    q, C, err = measured_bins(ds, name)
+    return psd_error_on_grid(q_grid, q, C, err, "zero" if how == "none" else how)
+
+
+def drawn_psd(draw: xr.DataArray, ds: xr.Dataset, name: str, q_grid: np.ndarray, how: str, seed: int) -> xr.DataArray:
+    """The measured PSD of ``name`` drawn within its band, on the grid: dims (draw, q)."""
+    q, C, err = measured_bins(ds, name)
+    kwargs = dict(q_grid=q_grid, q=q, C=C, modes=_modes(C, err), how="zero" if how == "none" else how,
+                  seed=seed, stream=STREAMS[name])
+    return xr.apply_ufunc(psd_draws_on_grid, draw, kwargs=kwargs, output_core_dims=[["q"]], dask="parallelized",
+                          output_dtypes=[float], dask_gufunc_kwargs={"output_sizes": {"q": q_grid.size}})
+
+
+def _coherence_bins(ds: xr.Dataset):
+    q, eta, err = (ds[k].values for k in ("q_substrate_measured", "coherence", "coherence_error"))
+    ok = np.isfinite(q) & np.isfinite(eta) & np.isfinite(err)
+    order = np.argsort(q[ok])
+    return q[ok][order], eta[ok][order], err[ok][order]
+
+
+def coherence_error_grid(ds: xr.Dataset, q_grid: np.ndarray) -> np.ndarray:
+    """Standard error of the measured coherence on the psd stage's grid (dimensionless)."""
+    q, _, err = _coherence_bins(ds)
+    return coherence_error_on_grid(q_grid, q, err)
+
+
+def drawn_coherence(draw: xr.DataArray, ds: xr.Dataset, q_grid: np.ndarray, seed: int) -> xr.DataArray:
+    """The measured coherence drawn within its band, on the grid: dims (draw, q)."""
+    q, eta, err = _coherence_bins(ds)
+    kwargs = dict(q_grid=q_grid, q=q, eta=eta, err=err, seed=seed, stream=STREAMS["coherence"])
+    return xr.apply_ufunc(coherence_draws_on_grid, draw, kwargs=kwargs, output_core_dims=[["q"]], dask="parallelized",
+                          output_dtypes=[float], dask_gufunc_kwargs={"output_sizes": {"q": q_grid.size}})

@@ -1,0 +1,166 @@
+"""Stages ``validation_bem`` and ``validation``: every theory variant against the project's own
+exact solver over Hurst exponents, bandwidths, coherences and loads, with the BEM's error bar
+measured (realizations, and the contact area's convergence in the pixel size).
+
+``validation_bem`` is a set of independent BEM tasks, one dask block per (H, bandwidth, eta,
+realization, pixels per wavelength): the engine computes them on the scene's scheduler (threads,
+processes or a dask.distributed cluster, ``--scheduler tcp://...``) and writes each block as it
+arrives. ``validation`` reduces them (Richardson extrapolation of the area, realization
+spread), evaluates every theory variant on the same spectra and writes the deviation table.
+Kernels: :mod:`roughcontact.physics.validation`, :mod:`roughcontact.physics.corrections`.
+Figures: :mod:`roughcontact.stages.figures.validation`. See docs/validation.md.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+
+from roughcontact.physics.validation import FIELDS, bem_block
+from roughcontact.stage import Figure, Param, Section, Stage, StageInput, Var, register, register_section
+
+from .bem import solver
+from .figures.validation import figure_kappa, figure_separation_ratio
+from .shared import MATERIAL_KEYS
+from .validation_table import OUTPUTS as TABLE_OUTPUTS, TABLE_COORDS, case_kwargs, compute_table
+from .variants import VARIANT_KEYS
+
+register_section(
+    Section(
+        "validation",
+        (
+            Param("hurst", "sweep", "", lo=0.0, hi=1.0, lo_open=True, dim="hurst",
+                  doc="Hurst exponents H of both surfaces (a list is a sweep)"),
+            Param("bandwidth", "sweep", "", lo=2.0, dim="bandwidth",
+                  doc="bandwidths zeta = q_max / qL of the cases (whole numbers; the BEM grid has "
+                      "pixels_per_wavelength x bandwidth pixels per side)"),
+            Param("reduced_pressure", "sweep", "", lo=0.0, lo_open=True, dim="reduced_pressure",
+                  doc="loads p / (E* g), g the rms slope of the case's combined spectrum"),
+            Param("pixels_per_wavelength", "sweep", "", lo=2.0, dim="pixels_per_wavelength",
+                  doc="the BEM's resolution ladder (pixels per shortest wavelength), coarse to fine, each twice the "
+                      "last: the area is extrapolated to zero pixel size from the two finest solved"),
+            Param("max_grid", "int", default=512, lo=8, hi=8192,
+                  doc="largest BEM grid solved; rungs with pixels_per_wavelength x bandwidth above it are skipped"),
+            Param("realizations", "int", default=2, lo=1, hi=1000, doc="random surface pairs per case"),
+            Param("seed", "int", default=0, lo=0, doc="random seed (same seed, same surfaces)"),
+            Param("qL", "quantity", "1/m", default=2e8, lo=0.0, lo_open=True, doc="lowest wavenumber 2 pi / L"),
+            Param("rolloff_substrate", "quantity", "", default=4.0, lo=1.0, doc="substrate roll-off q0 / qL"),
+            Param("rolloff_solid", "quantity", "", default=2.0, lo=1.0, doc="solid roll-off q0 / qL"),
+            Param("hrms_substrate", "quantity", "m", default=1e-9, lo=0.0, lo_open=True, doc="substrate rms height on the band"),
+            Param("hrms_solid", "quantity", "m", default=0.5e-9, lo=0.0, lo_open=True, doc="solid rms height on the band"),
+            Param("lattice", "choice", default="cell", choices=("cell", "point"),
+                  doc="PSD on the BEM lattice: averaged over each mode's cell (the band's variance exactly) or "
+                      "sampled at |k| (a few per cent more long-wavelength roughness)"),
+        ),
+        doc="the validation of the theory variants against the BEM (needs the [bem] extra: tamaas)",
+    )
+)
+
+BEM_KEYS = (*MATERIAL_KEYS, "interface.eta", "numerics.bem_tolerance", "numerics.points_per_decade",
+            *(f"validation.{k}" for k in ("hurst", "bandwidth", "reduced_pressure", "pixels_per_wavelength", "max_grid",
+                                          "realizations", "seed", "qL", "rolloff_substrate", "rolloff_solid",
+                                          "hrms_substrate", "hrms_solid", "lattice")))
+
+
+def _validate(inp: StageInput) -> None:
+    solver()
+
+
+def compute_validation_bem(inp: StageInput) -> xr.Dataset:
+    # one task per block, whatever the engine's memory-based chunks: every task is a whole BEM solve
+    hurst, band, eta = (_one_per_block(inp.sweep(dim, inp[key])) for dim, key in
+                        (("hurst", "validation.hurst"), ("bandwidth", "validation.bandwidth"), ("eta", "interface.eta")))
+    p_red = inp.sweep("reduced_pressure", np.sort(np.atleast_1d(inp["validation.reduced_pressure"])))
+    R = int(inp["validation.realizations"])
+    realization = xr.DataArray(np.arange(R), dims=("realization",), coords={"realization": np.arange(R)}).chunk(1)
+    n_w = _rungs(inp)
+    out = xr.apply_ufunc(
+        bem_block, hurst, band, eta, realization, n_w, p_red,
+        kwargs=dict(**case_kwargs(inp), seed=int(inp["validation.seed"]), tolerance=float(inp["numerics.bem_tolerance"]),
+                    lattice=inp["validation.lattice"]),
+        input_core_dims=[[], [], [], [], [], ["reduced_pressure"]], output_core_dims=[["reduced_pressure", "field"]],
+        dask="parallelized", output_dtypes=[float], dask_gufunc_kwargs={"output_sizes": {"field": len(FIELDS)}},
+    )
+    names = {"area": "validation_bem_contact_area_ratio", "gap": "validation_bem_mean_gap",
+             "seconds": "validation_bem_seconds_per_solve"}
+    ds = xr.Dataset({names[f]: out.isel(field=k, drop=True) for k, f in enumerate(FIELDS)})
+    grid = np.outer(np.atleast_1d(inp["validation.bandwidth"]), np.atleast_1d(inp["validation.pixels_per_wavelength"]))
+    if "bandwidth" in ds.dims and "pixels_per_wavelength" in ds.dims:
+        ds = ds.assign_coords(grid=(("bandwidth", "pixels_per_wavelength"), grid))
+    ds.attrs.update({"validation_lattice": inp["validation.lattice"], "validation_seed": int(inp["validation.seed"]),
+                     "validation_synthesis": "substrate and solid self-affine with H on qL..bandwidth qL, roll-offs and "
+                                             "hrms as the attributes say; noise from (seed, realization, bandwidth): the "
+                                             "same surfaces on every rung, for every H and eta"})
+    return ds
+
+
+def _rungs(inp: StageInput) -> xr.DataArray:
+    """Pixels per wavelength per (bandwidth, rung), NaN where the grid would exceed max_grid
+    (those tasks are not solved); built from the scene's values, one chunk per task."""
+    arrays = {}
+    for key, dim in (("pixels_per_wavelength", "pixels_per_wavelength"), ("bandwidth", "bandwidth")):
+        v = np.asarray(inp[f"validation.{key}"], dtype=float)
+        arrays[dim] = xr.DataArray(v, dims=(dim,), coords={dim: v}) if v.ndim else xr.DataArray(v)
+    n_w = arrays["pixels_per_wavelength"].where(arrays["pixels_per_wavelength"] * arrays["bandwidth"]
+                                                <= inp["validation.max_grid"])
+    return n_w.chunk({d: 1 for d in n_w.dims}) if n_w.dims else n_w
+
+
+def _one_per_block(da: xr.DataArray) -> xr.DataArray:
+    return da.chunk({d: 1 for d in da.dims}) if da.dims else da
+
+
+def _task_bytes(params, wanted, upstream) -> int:
+    """Working memory per load of a task: the solver's fields, about 200 bytes per pixel of the
+    largest map (docs/bem.md: ~150 measured), shared by the task's loads."""
+    loads = max(np.size(params["validation.reduced_pressure"]), 1)
+    return int(200 * params["validation.max_grid"] ** 2 / loads) + 64
+
+
+_DIMS = "(hurst, bandwidth, eta, realization, pixels_per_wavelength, reduced_pressure)"
+TASK_COORDS = {
+    "hurst": Var("1", "Hurst exponent H of both surfaces"),
+    "bandwidth": Var("1", "bandwidth zeta = q_max / qL of the case"),
+    "reduced_pressure": Var("1", "reduced pressure p / (E* g), g the rms slope of the combined spectrum"),
+    "pixels_per_wavelength": Var("1", "BEM pixels per shortest wavelength (resolution rung)"),
+    "realization": Var("1", "index of the random surface pair"),
+    "grid": Var("1", "BEM pixels per side, pixels_per_wavelength x bandwidth"),
+}
+
+register(
+    Stage(
+        name="validation_bem",
+        version="1",
+        compute=compute_validation_bem,
+        validate=_validate,
+        params=BEM_KEYS,
+        outputs={
+            "validation_bem_contact_area_ratio": Var("1", f"BEM relative contact area per task {_DIMS}"),
+            "validation_bem_mean_gap": Var("m", f"BEM mean interfacial separation per task {_DIMS}"),
+            "validation_bem_seconds_per_solve": Var("s", "wall time of the task divided by the pressures it solved"),
+        },
+        coords=TASK_COORDS,
+        point_bytes=_task_bytes,
+        unchunked=("reduced_pressure",),
+        doc="The validation's BEM tasks: synthesized pairs solved at every reduced pressure, per (H, bandwidth, eta, "
+            "realization, pixels per wavelength).",
+    )
+)
+
+register(
+    Stage(
+        name="validation",
+        version="1",
+        compute=compute_table,
+        requires=("validation_bem",),
+        params=BEM_KEYS + VARIANT_KEYS,
+        outputs=TABLE_OUTPUTS,
+        coords={**TASK_COORDS, **TABLE_COORDS},
+        figures=(Figure("validation_kappa", "kappa = (A/A0) E* g / p against p/(E* g): theory variants and BEM",
+                        ("validation",), figure_kappa),
+                 Figure("validation_separation", "mean separation, theory / BEM per variant, against p/(E* g)",
+                        ("validation",), figure_separation_ratio)),
+        doc="Theory variants against the BEM: extrapolated BEM area and its error bar, the variants on the same spectra, "
+            "and the deviation table.",
+    )
+)
