@@ -312,6 +312,12 @@ def _cumulative_at(values, count):
     return np.where(count > 0, np.take_along_axis(cum, np.maximum(count - 1, 0), -1), 0.0)
 
 
+def node_sum(values, count):
+    """sum(values[..., :count_j]) for each upper limit j: a quantity on the nodes of
+    :func:`separation_nodes` (..., K) summed up to each magnification (count (..., m))."""
+    return _cumulative_at(values, count)
+
+
 def separation_moments(s, weight, count, s_tail, q_tail):
     """The two moments of the small-pressure law up to each S = 1/w(zeta qL) (m), eqs 59-60.
 
@@ -434,3 +440,4 @@ def mean_separation(p, s, weight, count, s_tail, q_tail, *, E_star, alpha, refin
         extra = _cumulative_at(weight * power_J(z, k), count) + 0.5 * s_tail * power_J(zt, k) / q_tail[..., None]
         u = u + 2.0 * c / np.sqrt(np.pi) * extra
     return u
+

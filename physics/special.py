@@ -21,3 +21,5 @@ def _from_scipy(name: str):
 #: error function, scaled complementary error function exp(x^2) erfc(x), exponential integral E1,
 #: log of the absolute value of the gamma function, inverse of the regularized lower incomplete gamma
 erf, erfcx, exp1, gammaln, gammaincinv = (_from_scipy(n) for n in ("erf", "erfcx", "exp1", "gammaln", "gammaincinv"))
+#: inverse error function, standard normal distribution function
+erfinv, ndtr = (_from_scipy(n) for n in ("erfinv", "ndtr"))
