@@ -17,18 +17,12 @@ from roughcontact.cli import main
 from roughcontact.errors import UserError
 from roughcontact.stage import sections
 
-from conftest import SURFACE, make_scene
+from conftest import cli_error_line, SURFACE, make_scene
 
 SMALL = {"points_per_decade": 10}
 
 
-def _cli(capsys, *args):
-    code = main(list(map(str, args)))
-    err = capsys.readouterr().err.strip()
-    # --quiet still says one line per stage ("[1/2] psd: ..."); the error itself is one line
-    err = "\n".join(line for line in err.splitlines() if not re.match(r"\[\d+/\d+\] ", line))
-    assert "Traceback" not in err and len(err.splitlines()) <= 1, err
-    return code, err
+_cli = cli_error_line
 
 
 @pytest.fixture

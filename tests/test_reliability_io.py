@@ -28,19 +28,13 @@ from roughcontact.cli import main
 from roughcontact.errors import OutputError, UserError
 from roughcontact.preflight import LOCK_NAME
 
-from conftest import make_scene
+from conftest import cli_error_line, make_scene
 
 SMALL = {"points_per_decade": 10}
 TESTS = Path(__file__).resolve().parent
 
 
-def _cli(capsys, *args):
-    code = main(list(map(str, args)))
-    err = capsys.readouterr().err.strip()
-    # --quiet still says one line per stage ("[1/2] psd: ..."); the error itself is one line
-    err = "\n".join(line for line in err.splitlines() if not re.match(r"\[\d+/\d+\] ", line))
-    assert "Traceback" not in err and len(err.splitlines()) <= 1, err
-    return code, err
+_cli = cli_error_line
 
 
 def _quiet():
