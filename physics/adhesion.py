@@ -20,10 +20,10 @@ E. Tosatti, J. Chem. Phys. 115, 5597 (2001).
 from __future__ import annotations
 
 import numpy as np
-from scipy.special import erfcx
 
 from .contact import persson_G
 from .quadrature import integral, integral_to
+from .special import erfcx
 from .spectra import rms_slope_from_psd
 
 #: Elastic-energy factor models S_el(P) in U_el (seed eq 10): name -> description.

@@ -47,11 +47,20 @@ def tamaas_module():
     return tamaas
 
 
-def _flat_contact(pressures, stress_edges, nb):
+def _results(n, nb, shape=None):
+    """Zeroed result arrays for ``n`` pressures, ``nb`` histogram bins and gap maps of ``shape``."""
+    out = {"area": np.zeros(n), "mean_gap": np.zeros(n), "histogram": np.zeros((n, nb)), "overflow": np.zeros(n)}
+    if shape is not None:
+        out["gap"] = np.zeros((n,) + tuple(shape))
+    return out
+
+
+def _flat_contact(pressures, stress_edges, nb, shape=None):
     """A flat composite (e.g. identical surfaces with eta = 1): full contact at any pressure,
-    the local pressure everywhere equal to p (a delta in the histogram)."""
-    out = {"area": np.ones(pressures.size), "mean_gap": np.zeros(pressures.size),
-           "histogram": np.zeros((pressures.size, nb)), "overflow": np.zeros(pressures.size)}
+    the local pressure everywhere equal to p (a delta in the histogram); zero gap maps of
+    ``shape`` when asked for."""
+    out = _results(pressures.size, nb, shape)
+    out["area"][:] = 1.0
     for i, p in enumerate(pressures):
         if nb:
             edges = np.asarray(stress_edges[i])
@@ -63,13 +72,13 @@ def _flat_contact(pressures, stress_edges, nb):
     return out
 
 
-def solve_contact(heights, pixel_size, E_star, pressures, *, tolerance=1e-10, stress_edges=None):
+def solve_contact(heights, pixel_size, E_star, pressures, *, tolerance=1e-10, stress_edges=None, progress=None,
+                  fields=False):
     """Frictionless non-adhesive contact of an elastic half-space with a rigid periodic surface.
 
     Tamaas' Polonsky-Keer-Rey solver at each mean pressure, on the map's periodic cell,
-    increasing pressures warm-started from the previous solution. The problem is solved in
-    reduced units (lengths in pixels, stresses in E*), which is exact for linear elasticity
-    and keeps the solver's tolerance meaningful whatever the scales.
+    increasing pressures warm-started from the previous solution, in reduced units (lengths in
+    pixels, stresses in E*: exact for linear elasticity, the tolerance meaningful at any scale).
 
     Parameters
     ----------
@@ -86,16 +95,20 @@ def solve_contact(heights, pixel_size, E_star, pressures, *, tolerance=1e-10, st
         Relative tolerance of the solver (dimensionless).
     stress_edges : array (np, nb + 1), optional
         Per pressure, edges of the histogram of the local contact pressure (Pa).
+    progress : callable, optional
+        Called as ``progress(1)`` after each pressure is solved (for a progress bar).
+    fields : bool
+        Also return the gap maps ``gap``, below.
 
     Returns
     -------
     dict with
         ``area`` (np,): relative contact area A/A0 (fraction of pixels with pressure > 0);
         ``mean_gap`` (np,): mean interfacial separation, the map average of the gap (m);
-        ``histogram`` (np, nb): density of the local pressure (1/Pa) over the whole map, so
-        that sum(histogram * width) = fraction of the map in contact inside the edges
-        (the non-contact part, a delta at 0, is left out, as in seed eq 16);
-        ``overflow`` (np,): fraction of the map in contact above the last edge.
+        ``histogram`` (np, nb): density of the local pressure (1/Pa) over the whole map (sum of
+        histogram * width = the map's fraction in contact inside the edges; no delta at 0, eq 16);
+        ``overflow`` (np,): fraction of the map in contact above the last edge;
+        ``gap`` (np, nx, ny), with ``fields``: local gap (m), 0 where the pressure is > 0.
 
     Raises
     ------
@@ -116,18 +129,10 @@ def solve_contact(heights, pixel_size, E_star, pressures, *, tolerance=1e-10, st
     nb = 0 if stress_edges is None else np.shape(stress_edges)[-1] - 1
     surface = (heights - heights.mean()) / pixel_size
     if np.ptp(surface) == 0.0:
-        return _flat_contact(pressures, stress_edges, nb)
-    out = {"area": np.empty(pressures.size), "mean_gap": np.empty(pressures.size),
-           "histogram": np.zeros((pressures.size, nb)), "overflow": np.zeros(pressures.size)}
+        return _flat_contact(pressures, stress_edges, nb, (nx, ny) if fields else None)
+    out = _results(pressures.size, nb, (nx, ny) if fields else None)
     tm = tamaas_module()
-
-    def fresh():
-        model = tm.ModelFactory.createModel(tm.model_type.basic_2d, [float(nx), float(ny)], [nx, ny])
-        model.E = 1.0
-        model.nu = 0.0  # E* = E / (1 - nu^2) = 1 in reduced units
-        return model, tm.PolonskyKeerRey(model, np.ascontiguousarray(surface), float(tolerance))
-
-    model, solver = fresh()
+    model, solver = _pkr(tm, surface, tolerance)
     for i, p in enumerate(pressures):
         for attempt in (0, 1):
             try:
@@ -138,18 +143,32 @@ def solve_contact(heights, pixel_size, E_star, pressures, *, tolerance=1e-10, st
                 # one-node solution can hit it where a cold start does not: retry cold once
                 if attempt:
                     raise SubPixelContact(float(p), (nx, ny), str(exc).strip().splitlines()[-1]) from None
-                model, solver = fresh()
+                model, solver = _pkr(tm, surface, tolerance)
         traction = np.array(model.traction, copy=True).reshape(nx, ny) * E_star
         gap = (np.array(model.displacement, copy=True).reshape(nx, ny) - surface) * pixel_size
         _reduce(out, i, traction, gap, None if stress_edges is None else stress_edges[i])
+        if progress is not None:
+            progress(1)
     return out
 
 
+def _pkr(tm, surface, tolerance):
+    """A fresh tamaas model (E* = 1 in reduced units) and its Polonsky-Keer-Rey solver on the
+    periodic ``surface`` (heights in pixels)."""
+    nx, ny = surface.shape
+    model = tm.ModelFactory.createModel(tm.model_type.basic_2d, [float(nx), float(ny)], [nx, ny])
+    model.E = 1.0
+    model.nu = 0.0  # E* = E / (1 - nu^2) = 1 in reduced units
+    return model, tm.PolonskyKeerRey(model, np.ascontiguousarray(surface), float(tolerance))
+
+
 def _reduce(out, i, traction, gap, edges):
-    """Store the solution at pressure index ``i``: contact fraction, mean gap (m) and the
-    histogram of the local pressure (Pa) on ``edges``."""
+    """Store the solution at pressure index ``i``: contact fraction, mean gap (m), the
+    histogram of the local pressure (Pa) on ``edges`` and, if ``out`` has it, the gap map."""
     npix = traction.size
     contact = traction > 0
+    if "gap" in out:
+        out["gap"][i] = np.where(contact, 0.0, np.maximum(gap, 0.0))
     out["area"][i] = np.count_nonzero(contact) / npix
     out["mean_gap"][i] = max(float(gap.mean()), 0.0)
     if edges is not None and np.size(edges) > 1:
@@ -175,7 +194,7 @@ def contact_pair(h1, h2, pixel_size, E_star, pressures, **kwargs):
     pressures : array
         Mean pressures (Pa), > 0.
     **kwargs
-        ``tolerance``, ``stress_edges`` of :func:`solve_contact`.
+        ``tolerance``, ``stress_edges``, ``progress`` of :func:`solve_contact`.
     """
     h1, h2 = np.asarray(h1, dtype=float), np.asarray(h2, dtype=float)
     if h1.shape != h2.shape:

@@ -9,10 +9,10 @@ Phys. 115, 3840 (2001).
 from __future__ import annotations
 
 import numpy as np
-from scipy.special import erf
 
 from .inputs import require_nonnegative, require_pressure
 from .quadrature import integral_to
+from .special import erf
 
 
 def effective_modulus(E, nu):

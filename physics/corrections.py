@@ -36,12 +36,12 @@ from __future__ import annotations
 import functools
 
 import numpy as np
-from scipy.special import erf
 
 from .contact import contact_area_ratio, persson_G
 from .quadrature import gauss_legendre_panels
 from .roots import illinois
 from .separation import mean_separation, separation_nodes
+from .special import erf
 
 #: the corrections by name, with what each one means
 CORRECTIONS = {

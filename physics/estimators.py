@@ -19,7 +19,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import scipy.fft
 
 from .spectra import extend_psd, isotropic_factor
 from .lattice import area_lattice, bincount, profile_lattice
@@ -109,6 +108,8 @@ def binned_spectra_area(h1, sx, sy, edges, q_max, h2=None):
     norm = ((sx / nx) * (sy / ny)) ** 2 / ((2.0 * np.pi) ** 2 * sx * sy)
     nb = edges.size - 1
     idx, w, count, qsum = area_lattice(nx, ny, sx, sy, edges, q_max)
+    import scipy.fft  # imported when a map is analysed, not with the stage declarations
+
     out = {}
     H1 = scipy.fft.rfft2(h1)
     P = H1.real**2 + H1.imag**2
@@ -167,6 +168,8 @@ def binned_spectra_profiles(h1, sx, edges, q_max, hurst, h2=None):
     qx, idx, count, qsum = profile_lattice(nx, nprof, sx, edges, q_max)
     conv = np.zeros_like(qx)
     conv[qx > 0] = isotropic_factor(hurst) / qx[qx > 0]
+    import scipy.fft  # imported when a profile is analysed, not with the stage declarations
+
     H1 = scipy.fft.rfft(h1, axis=0)
     out = {"C11": (np.abs(H1) ** 2).sum(axis=1)}
     if h2 is not None:

@@ -36,13 +36,13 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
-from scipy.special import erf
 
 from roughcontact.errors import ComputationError
 
 from .friction import angular_integrals, area_factor, contact_fraction, friction_kernel
 from .quadrature import loglog_interp, segment_integrals_pairs
 from .roots import illinois
+from .special import erf
 from .volterra import abel_weights
 
 _SERIES = np.array([(-1.0) ** n / (np.prod(np.arange(1, n + 1)) * (2 * n + 1) * (n + 1.5)) for n in range(8)])

@@ -25,11 +25,11 @@ See docs/theory.md, section "Friction"; Persson, J. Chem. Phys. 115, 3840 (2001)
 from __future__ import annotations
 
 import numpy as np
-from scipy.special import erf
 
 from .corrections import corrected_area
 from .inputs import require_pressure
 from .quadrature import cumulative_integral, gauss_legendre, running_weighted_integral
+from .special import erf
 from .viscoelastic import modulus_at
 
 

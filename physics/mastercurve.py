@@ -17,6 +17,9 @@ Kramers-Kronig: E' rebuilt from a spectrum fitted to E'' alone (plus the one con
 not fix, the relaxed modulus) must match the measured E'. See docs/theory.md, section "Master
 curves from DMA data"; Ferry, Viscoelastic Properties of Polymers, 3rd ed. (1980), ch. 11;
 Tschoegl (1989), ch. 3-4.
+
+scipy.optimize and scipy.interpolate are imported inside the functions that fit (loading the stage
+declarations, as a rerun with nothing to compute does, does not import them).
 """
 
 from __future__ import annotations
@@ -24,8 +27,6 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
-from scipy.interpolate import BSpline
-from scipy.optimize import least_squares, nnls
 
 from .viscoelastic import prony_modulus, wlf_log10_shift
 
@@ -58,6 +59,8 @@ class Shifts(NamedTuple):
 
 def _spline_residuals(x, ys, knots_per_decade):
     """Residuals of ys (each (m,)) about a least-squares cubic B-spline in x, uniform knots over x's span."""
+    from scipy.interpolate import BSpline
+
     lo, hi = float(np.min(x)), float(np.max(x))
     n = max(2, int(np.ceil((hi - lo) * knots_per_decade)))
     inner = np.linspace(lo, hi, n + 1)
@@ -149,6 +152,8 @@ def fit_wlf(T, log10_aT, T_ref, anchor=None, sigma=None):
     docs/theory.md, section "Master curves from DMA data"; Williams, Landel & Ferry, J. Am. Chem.
     Soc. 77, 3701 (1955).
     """
+    from scipy.optimize import least_squares
+
     T = np.asarray(T, dtype=float)
     L = np.asarray(log10_aT, dtype=float)
     T0 = T[anchor] if anchor is not None else T_ref
@@ -208,6 +213,8 @@ def build_master_curve(T, sweep, omega, storage, loss, T_ref, method="free", ver
     ----------
     docs/theory.md, section "Master curves from DMA data"; Ferry (1980), ch. 11.
     """
+    from scipy.optimize import least_squares
+
     T = np.asarray(T, dtype=float)
     n_T = T.size
     logw, l1 = np.log10(omega), np.log10(storage)
@@ -294,6 +301,8 @@ def fit_prony(omega, storage, loss, times):
     ----------
     docs/theory.md, section "Master curves from DMA data"; Tschoegl (1989), ch. 4.
     """
+    from scipy.optimize import nnls
+
     S, L = _basis(omega, times)
     M = np.vstack([np.column_stack([np.ones_like(omega), S]) / storage[:, None],
                    np.column_stack([np.zeros_like(omega), L]) / loss[:, None]])
@@ -337,6 +346,8 @@ def kramers_kronig_deviation(omega, storage, loss, times, sweep):
     docs/theory.md, section "Master curves from DMA data"; Tschoegl (1989), ch. 4; Booij & Thoone,
     Rheol. Acta 21, 15 (1982).
     """
+    from scipy.optimize import nnls
+
     S, L = _basis(omega, times)
     M = L / loss[:, None]
     scale = np.linalg.norm(M, axis=0)

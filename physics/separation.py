@@ -27,10 +27,10 @@ from __future__ import annotations
 import functools
 
 import numpy as np
-from scipy.special import erf, erfcx, exp1
 
 from .inputs import require_pressure
 from .quadrature import cumulative_integral, gauss_legendre_panels, integral_to, inverse_cumulative_integral
+from .special import erf, erfcx, exp1
 
 #: eps = exp(\\int_0^inf 2x ln x exp(-x^2) dx) = exp(-gamma_Euler / 2) = 0.749306..., seed eq 28.
 EPSILON = float(np.exp(-0.5 * np.euler_gamma))
@@ -312,6 +312,12 @@ def _cumulative_at(values, count):
     return np.where(count > 0, np.take_along_axis(cum, np.maximum(count - 1, 0), -1), 0.0)
 
 
+def node_sum(values, count):
+    """sum(values[..., :count_j]) for each upper limit j: a quantity on the nodes of
+    :func:`separation_nodes` (..., K) summed up to each magnification (count (..., m))."""
+    return _cumulative_at(values, count)
+
+
 def separation_moments(s, weight, count, s_tail, q_tail):
     """The two moments of the small-pressure law up to each S = 1/w(zeta qL) (m), eqs 59-60.
 
@@ -434,3 +440,4 @@ def mean_separation(p, s, weight, count, s_tail, q_tail, *, E_star, alpha, refin
         extra = _cumulative_at(weight * power_J(z, k), count) + 0.5 * s_tail * power_J(zt, k) / q_tail[..., None]
         u = u + 2.0 * c / np.sqrt(np.pi) * extra
     return u
+

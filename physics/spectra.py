@@ -8,8 +8,8 @@ with hrms^2 = 2 pi \\int q C(q) dq. See docs/theory.md, section "Spectra".
 from __future__ import annotations
 
 import numpy as np
-import scipy.special
 
+from . import special
 from .inputs import require_coherence
 from .quadrature import integral, loglog_interp
 
@@ -170,4 +170,4 @@ def isotropic_factor(H):
     \\int dq_y C(sqrt(q^2 + q_y^2))); an approximation otherwise (roll-off, cut-offs).
     """
     H = np.asarray(H, dtype=float)
-    return np.exp(scipy.special.gammaln(1.0 + H) - scipy.special.gammaln(H + 0.5)) / (2.0 * np.pi**1.5)
+    return np.exp(special.gammaln(1.0 + H) - special.gammaln(H + 0.5)) / (2.0 * np.pi**1.5)

@@ -23,8 +23,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import scipy.special
 
+from . import special
 from .estimators import binned_psd_on_grid, coherence_on_grid
 
 # ----------------------------------------------------------------------------------------
@@ -65,7 +65,7 @@ def spread_inflation(values, modes, merged, alpha=0.01):
     with np.errstate(invalid="ignore", divide="ignore"):
         dev = np.where(has, modes * (np.nan_to_num(values) - merged) ** 2, 0.0).sum(axis=0) / merged**2
         ratio = np.where(k >= 2, np.sqrt(dev / np.maximum(k - 1, 1)), np.nan)
-    limit = 2.0 * scipy.special.gammaincinv(np.maximum(k - 1, 1) / 2.0, 1.0 - alpha)  # chi-square quantile
+    limit = 2.0 * special.gammaincinv(np.maximum(k - 1, 1) / 2.0, 1.0 - alpha)  # chi-square quantile
     inflation = np.where((k >= 2) & (dev > limit), ratio, 1.0)
     return ratio, np.nan_to_num(inflation, nan=1.0)
 
@@ -126,12 +126,12 @@ def grid_weights(q_grid, q, how):
 
 def _power_factor(n, s):
     """E[(C_hat/C)^s] for a bin mean of n exponential modes: Gamma(n + s) / (Gamma(n) n^s)."""
-    return np.exp(scipy.special.gammaln(n + s) - scipy.special.gammaln(n) - s * np.log(n))
+    return np.exp(special.gammaln(n + s) - special.gammaln(n) - s * np.log(n))
 
 
 def _drawn_power_factor(n, s):
     """E[(C*/C_hat)^s] for the draws of :func:`psd_draws`: n^s Gamma(n + 1 - s) / Gamma(n + 1)."""
-    return np.exp(s * np.log(n) + scipy.special.gammaln(n + 1.0 - s) - scipy.special.gammaln(n + 1.0))
+    return np.exp(s * np.log(n) + special.gammaln(n + 1.0 - s) - special.gammaln(n + 1.0))
 
 
 def interpolation_unbiasing(q_grid, q, modes, how, drawn=False):

@@ -254,7 +254,7 @@ def _raise_unconverged(root, failed, what, maxiter):
     raise err
 
 
-def solve_partial_contact(prob, sigma0, c0, c1, K_min=1e-8, tol=1e-10, maxiter=80):
+def solve_partial_contact(prob, sigma0, c0, c1, K_min=1e-8, tol=1e-10, maxiter=80, progress=None):
     """Self-consistent partial-contact solution (attached branch) for every PSD of ``prob``.
 
     Root of R(K) = N(zeta1) - P(zeta1) F in K = gamma_eff(1)/Delta_gamma (seed eqs 9, 13).
@@ -278,6 +278,8 @@ def solve_partial_contact(prob, sigma0, c0, c1, K_min=1e-8, tol=1e-10, maxiter=8
         Tolerance of the root in R and, relatively, in t (or K).
     maxiter : int
         Illinois iterations.
+    progress : callable, optional
+        Called as ``progress(1)`` after each march over the batch (for a progress bar).
 
     Returns
     -------
@@ -293,7 +295,10 @@ def solve_partial_contact(prob, sigma0, c0, c1, K_min=1e-8, tol=1e-10, maxiter=8
     sig0 = np.broadcast_to(np.asarray(sigma0, dtype=float) / np.sqrt(prob.sigma_u2), (B,))
 
     def run(K, idx):
-        return march(prob.zeta, prob.a[idx], prob.wel[idx], prob.F[idx], K, sig0[idx], c0[idx], c1[idx])["R"]
+        R = march(prob.zeta, prob.a[idx], prob.wel[idx], prob.F[idx], K, sig0[idx], c0[idx], c1[idx])["R"]
+        if progress is not None:
+            progress(1)
+        return R
 
     K = np.zeros(B)
     every = np.arange(B)
@@ -337,7 +342,8 @@ def _solution(prob, K, attached, sig0, c0, c1):
             "attached": attached, "node_residual": out["node_residual"]}
 
 
-def vanishing_scale(make_C, q, E_star, delta_gamma, zeta, h_lo, h_hi, c0, c1, K_min=1e-8, tol=1e-10, maxiter=100):
+def vanishing_scale(make_C, q, E_star, delta_gamma, zeta, h_lo, h_hi, c0, c1, K_min=1e-8, tol=1e-10, maxiter=100,
+                    progress=None):
     """Substrate hrms at which adhesion vanishes (sigma0 = 0), by root-finding between an
     attached ``h_lo`` and a detached ``h_hi``.
 
@@ -366,6 +372,8 @@ def vanishing_scale(make_C, q, E_star, delta_gamma, zeta, h_lo, h_hi, c0, c1, K_
         Relative tolerance in h.
     maxiter : int
         Illinois iterations.
+    progress : callable, optional
+        Called as ``progress(1)`` after each march (for a progress bar).
 
     Returns
     -------
@@ -374,7 +382,10 @@ def vanishing_scale(make_C, q, E_star, delta_gamma, zeta, h_lo, h_hi, c0, c1, K_
     """
     def R(h):
         prob = AdhesionProblem(q, make_C(h), E_star, delta_gamma, zeta)
-        return march(zeta, prob.a, prob.wel, prob.F, K_min * prob.F, 0.0, c0, c1)["R"]
+        residual = march(zeta, prob.a, prob.wel, prob.F, K_min * prob.F, 0.0, c0, c1)["R"]
+        if progress is not None:
+            progress(1)
+        return residual
 
     f_lo, f_hi = R(h_lo), R(h_hi)
     if np.any(f_lo >= 0) or np.any(f_hi < 0):
@@ -388,7 +399,7 @@ def vanishing_scale(make_C, q, E_star, delta_gamma, zeta, h_lo, h_hi, c0, c1, K_
     return 0.5 * (root.lo + root.hi)
 
 
-def vanishing_hrms_from_sweep(K, C1, C2, eta, c0, c1, hs, q, E_star, delta_gamma, zeta, K_min, tol):
+def vanishing_hrms_from_sweep(K, C1, C2, eta, c0, c1, hs, q, E_star, delta_gamma, zeta, K_min, tol, progress=None):
     """Per case, the substrate hrms where the attached branch ends, bracketed by a sweep.
 
     The bracket is the first step of the (increasing) substrate-hrms sweep from attached
@@ -410,7 +421,7 @@ def vanishing_hrms_from_sweep(K, C1, C2, eta, c0, c1, hs, q, E_star, delta_gamma
         S_el = c0 + c1 P^2.
     hs : array (n,)
         Increasing substrate hrms of the sweep (m).
-    q, E_star, delta_gamma, zeta, K_min, tol
+    q, E_star, delta_gamma, zeta, K_min, tol, progress
         As in :func:`vanishing_scale`.
 
     Returns
@@ -435,5 +446,5 @@ def vanishing_hrms_from_sweep(K, C1, C2, eta, c0, c1, hs, q, E_star, delta_gamma
             return psd_combined(h[:, None] ** 2 * unit, C2[idx], eta[idx, None])
 
         out[idx] = vanishing_scale(make_C, q, E_star, delta_gamma, zeta, hs[j], hs[j + 1], c0[idx], c1[idx],
-                                   K_min=K_min, tol=tol)
+                                   K_min=K_min, tol=tol, progress=progress)
     return out, status

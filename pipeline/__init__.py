@@ -1,8 +1,16 @@
 """roughcontact: Persson's contact mechanics for two rough surfaces, as a staged pipeline.
 
+The Python API (:mod:`roughcontact.api`, documented in docs/api.md) is available at the top
+level and imported on first use, so that ``import roughcontact`` stays cheap::
+
+    import roughcontact as rc
+    scene = rc.load_scene("default")          # a file, a built-in name or a dict
+    results = rc.run(scene, outdir="outputs/default", progress=False)
+    results["base"]["contact"]                # an xarray Dataset per variant and stage
+
 The package has three layers (docs/architecture.md):
 
-* :mod:`roughcontact.physics`: pure numpy kernels, one function per equation;
+* :mod:`roughcontact.physics`: pure numpy kernels, one function per equation (docs/theory.md);
 * :mod:`roughcontact.stages`: thin declarations wiring kernels to scene keys and to labelled
   outputs (units and long names declared once);
 * the engine (this package's own modules: :mod:`~roughcontact.scene`, :mod:`~roughcontact.engine`,
@@ -11,4 +19,24 @@ The package has three layers (docs/architecture.md):
   only through the registry of :mod:`roughcontact.stage`.
 """
 
-__version__ = "0.1.0"
+try:  # written by setuptools-scm when the package is built (pip install), from git
+    from ._version import __version__
+except ImportError:  # pragma: no cover - a source tree that was never built
+    __version__ = "0+unbuilt"
+
+#: the Python API, re-exported from roughcontact.api on first use
+API = ("load_scene", "plan", "run", "open_result", "builtin_scenes", "Results")
+
+__all__ = ["__version__", *API]
+
+
+def __getattr__(name: str):
+    if name in API:
+        from . import api
+
+        return getattr(api, name)
+    raise AttributeError(f"module 'roughcontact' has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(API))

@@ -14,7 +14,8 @@ The error of an output is measured against the output's own scale (docs/accuracy
 a relative error wherever the output is at least a millionth of its largest value, and the
 error in units of that millionth below it (where, e.g., a separation of 1e-26 m at full contact
 has no meaningful relative error). A stage's error is the worst over its main outputs. Wall
-times are the median of a few forced runs (one for runs over :data:`REPEAT_BELOW` seconds).
+times are the median of a few forced runs (one for runs over :data:`REPEAT_BELOW` seconds);
+progress goes through :class:`roughcontact.progress.Reporter` (bars on a terminal).
 The table is written as NetCDF and drawn as error against wall time.
 """
 
@@ -30,6 +31,7 @@ import xarray as xr
 
 from . import __version__, engine, scene as scenes, store
 from .errors import UserError
+from .progress import SILENT, Reporter
 from .scene import PRESETS, Scene
 from .stage import Stage, sections
 
@@ -102,22 +104,6 @@ def _interp(da: xr.DataArray, dim: str, target: xr.DataArray) -> xr.DataArray:
     return da.interp({dim: target.values})
 
 
-def _progress(total: int, desc: str, enabled: bool):
-    """A small progress bar (tqdm, on stderr) with a ``step(note)`` callback; a local helper until
-    the package has a shared progress module."""
-    from tqdm import tqdm
-
-    bar = tqdm(total=total, desc=desc, unit="run", disable=not enabled, leave=False, dynamic_ncols=True)
-
-    def step(note: str = "") -> None:
-        bar.set_postfix_str(note, refresh=False)
-        bar.update(1)
-
-    step.bar = bar
-    step.close = bar.close
-    return step
-
-
 def _fixed_magnifications(scene: Scene, needed: list[Stage], result: xr.Dataset) -> dict:
     """``{"contact.zeta": [...]}`` when the scene asks for every node of the q grid (zeta = "all"):
     the nodes of the cheapest rung's grid (``result``), so that every rung is computed and compared
@@ -134,7 +120,7 @@ def _settings_of(sc: Scene, needed: list[Stage]) -> dict:
     return {name: repr(sc.get(name)) for st in needed for name in st.params}
 
 
-def measure_stage(scene: Scene, st: Stage, workdir: Path, progress: bool = False) -> dict:
+def measure_stage(scene: Scene, st: Stage, workdir: Path, report: Reporter = SILENT) -> dict:
     needed = engine.needed_stages(scene, st.main_outputs)
     params = resolution_params(needed)
     own = [p for k, p in params.items() if k in st.params] or list(params.values())
@@ -142,7 +128,7 @@ def measure_stage(scene: Scene, st: Stage, workdir: Path, progress: bool = False
     if rungs < 2:
         return {}
     settings = [{k: p.ladder[min(i, len(p.ladder) - 1)] for k, p in params.items()} for i in range(rungs)]
-    step = _progress(1 + rungs + len(PRESETS), f"accuracy {st.name}", progress)
+    step = report.bar(f"accuracy of {st.name}: warm-up", total=1, unit="run")
 
     def timed(sc: Scene, tag: str):
         """The result and the median wall time of forced runs (three if a run is short)."""
@@ -151,7 +137,7 @@ def measure_stage(scene: Scene, st: Stage, workdir: Path, progress: bool = False
             t0 = time.perf_counter()
             res = engine.run(sc, out, targets=st.main_outputs, force=("all",), report=engine.Reporter(None))
             times.append(time.perf_counter() - t0)
-        step(f"{tag}: {np.median(times):.2g} s")
+        step()
         return res["base"][st.name], float(np.median(times))
 
     try:
@@ -162,7 +148,9 @@ def measure_stage(scene: Scene, st: Stage, workdir: Path, progress: bool = False
         keys = [_settings_of(sc, needed) for sc in rung_scenes]
         same = {name: next((i for i, k in enumerate(keys) if k == _settings_of(sc, needed)), None)
                 for name, sc in preset_scenes.items()}
-        step.bar.total -= sum(i is not None for i in same.values())  # presets that reuse a rung's run
+        step.close()  # the rungs and the presets that reuse none of them
+        step = report.bar(f"accuracy of {st.name}: rungs and presets", unit="run",
+                          total=rungs + sum(i is None for i in same.values()))
         runs = [timed(sc, f"rung {i}") for i, sc in enumerate(rung_scenes)]
         reference = runs[-1][0]
         errors = [output_errors(r, reference, st.main_outputs) for r, _ in runs]
@@ -173,19 +161,24 @@ def measure_stage(scene: Scene, st: Stage, workdir: Path, progress: bool = False
             presets[name] = (output_errors(res, reference, st.main_outputs), seconds, i)
     finally:
         step.close()
+        report.finish()
     return {"settings": settings, "errors": errors, "times": [t for _, t in runs], "presets": presets,
             "tolerance": st.tolerance, "outputs": [n for n in st.main_outputs if n in errors[0]]}
 
 
-def measure(scene: Scene, outdir: Path, report=print, progress: bool = True) -> xr.Dataset:
-    """Measure every stage of the scene that declares main outputs; write NetCDF + PNG."""
+def measure(scene: Scene, outdir: Path, report: Reporter | None = None) -> xr.Dataset:
+    """Measure every stage of the scene that declares main outputs; write NetCDF + PNG. Progress
+    (bars on a terminal) and the table go to ``report`` (default: a
+    :class:`~roughcontact.progress.Reporter` on stderr)."""
+    report = report if report is not None else Reporter()
     all_stages = engine.needed_stages(scene, scene.outputs)
     measured = {}
     with tempfile.TemporaryDirectory() as tmp:
         for st in all_stages:
             if not st.main_outputs:
                 continue
-            m = measure_stage(scene, st, Path(tmp), progress=progress)
+            report(f"accuracy: {st.name} ...")
+            m = measure_stage(scene, st, Path(tmp), report)
             if m:
                 measured[st.name] = m
                 for name, (errs, secs, rung) in m["presets"].items():

@@ -34,7 +34,7 @@ def _parser() -> argparse.ArgumentParser:
 
     run = scene_command("run", "compute what the scene asks for, reusing up-to-date results")
     run.add_argument("--force", action="append", default=[], metavar="STAGE", help="recompute STAGE even if fresh ('all': every stage)")
-    run.add_argument("--quiet", action="store_true", help="no progress messages")
+    run.add_argument("--quiet", action="store_true", help="no progress bars: one line per stage")
     run.add_argument("--scheduler", help="threads (default), processes, synchronous, or a dask.distributed "
                                          "scheduler address tcp://host:port (overrides [run] scheduler)")
     plan = scene_command("plan", "say for each stage whether it is fresh, stale (and why) or missing; exit 1 if anything would run")
@@ -120,9 +120,10 @@ def _scene_command(args, sc) -> int:
         for note in notes:
             print(f"note: {note}")
         return 1 if any(p.status != "fresh" for p in plans) else 0
-    reporter = engine.Reporter(None if getattr(args, "quiet", False) else sys.stderr)
+    reporter = engine.Reporter(sys.stderr, bars=False if getattr(args, "quiet", False) else None)
     if args.command == "run":
-        engine.run(sc, outdir, force=args.force, report=reporter, scheduler=args.scheduler, verify=args.verify)
+        engine.run(sc, outdir, force=args.force, report=reporter, scheduler=args.scheduler, verify=args.verify,
+                   open_results=False)
         print(f"results in {outdir}")
         return 0
     if args.command == "plot":
@@ -130,7 +131,7 @@ def _scene_command(args, sc) -> int:
     if args.command == "accuracy":
         from .accuracy import measure
 
-        measure(sc, outdir / "accuracy")
+        measure(sc, outdir / "accuracy", report=reporter)
         print(f"accuracy table and plot in {outdir / 'accuracy'}")
         return 0
     raise AssertionError(args.command)

@@ -15,16 +15,15 @@ from __future__ import annotations
 import contextlib
 import itertools
 import math
-import sys
-import time
+import os
 from typing import Iterator, Mapping
 
-import dask
 import numpy as np
 import xarray as xr
 
 from . import ncio
 from .errors import UserError
+from .progress import Tick
 
 
 def auto_chunks(sizes: Mapping[str, int], budget_points: int, explicit: Mapping[str, int] | None = None) -> dict[str, int]:
@@ -62,7 +61,7 @@ def scheduler(setting: str) -> Iterator[object]:
         import multiprocessing
         from concurrent.futures import ProcessPoolExecutor
 
-        with ProcessPoolExecutor(dask.system.CPU_COUNT, mp_context=multiprocessing.get_context("spawn")) as pool:
+        with ProcessPoolExecutor(os.cpu_count() or 2, mp_context=multiprocessing.get_context("spawn")) as pool:
             yield pool
         return
     if setting in ("threads", "synchronous", "sync"):
@@ -112,47 +111,27 @@ def _check_workers(client, address: str) -> None:
                         key="run.scheduler")
 
 
-class Progress:
-    """A one-line text progress bar on a stream (blocks written / total)."""
-
-    def __init__(self, total: int, label: str, stream=sys.stderr, width: int = 30):
-        self.total, self.label, self.stream, self.width = total, label, stream, width
-        self.done = 0
-        self.t0 = time.perf_counter()
-        self._last = 0.0
-
-    def advance(self, n: int = 1) -> None:
-        self.done += n
-        now = time.perf_counter()
-        if self.stream is None or (now - self._last < 0.2 and self.done < self.total):
-            return
-        self._last = now
-        filled = int(self.width * self.done / max(self.total, 1))
-        self.stream.write(f"\r    {self.label} [{'#' * filled}{'.' * (self.width - filled)}] "
-                          f"{self.done}/{self.total} blocks {now - self.t0:6.1f} s")
-        if self.done >= self.total:
-            self.stream.write("\n")
-        self.stream.flush()
-
-
 def dask_variables(ds: xr.Dataset) -> list[str]:
     return [name for name, v in ds.variables.items() if v.chunks is not None]
 
 
-def write_blocks(path, ds: xr.Dataset, names: list[str], compute_with, progress_stream=sys.stderr,
+def write_blocks(path, ds: xr.Dataset, names: list[str], compute_with, progress=None,
                  in_flight: int | None = None, checksums=None) -> None:
     """Compute the dask variables ``names`` of ``ds`` block by block and write them into the
-    existing NetCDF file ``path`` (whose other variables are already written).
+    existing NetCDF file ``path`` (whose other variables are already written); ``progress`` (a
+    :class:`roughcontact.progress.Reporter`) shows the blocks written.
 
     Variables with the same dimensions and chunks are computed together, so that work they share
     (an integral over q, say) is done once per block.
     """
+    import dask  # imported here: a run with nothing to compute never needs it
+
     groups: dict[tuple, list[str]] = {}
     for name in names:
         var = ds[name].variable
         groups.setdefault((var.dims, var.chunks), []).append(name)
     total = sum(math.prod(len(c) for c in chunks) for (_, chunks) in groups)
-    bar = Progress(total, "writing", progress_stream)
+    bar = progress.bar("writing", total, unit="block") if progress is not None else Tick()
     from concurrent.futures import Executor
 
     pool = compute_with if isinstance(compute_with, Executor) else None
@@ -191,4 +170,4 @@ def write_blocks(path, ds: xr.Dataset, names: list[str], compute_with, progress_
                     if checksums is not None:
                         for name, value in zip(group, values):
                             checksums.add(name, np.asarray(value), [s.start for s in sl])
-                    bar.advance()
+                    bar()

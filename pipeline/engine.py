@@ -7,16 +7,17 @@ existing result, and computes only what is missing or stale, upstream first.
 
 from __future__ import annotations
 
-import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Iterable, TextIO
+from typing import Iterable
 
 import xarray as xr
 
-from . import integrity, preflight, store
+from . import integrity, preflight, reuse, store
 from .errors import UserError
+from .progress import Reporter
+from .results import StageResults
 from .schema import MISSING, did_you_mean
 from .scene import Scene, units_of
 from .units import display
@@ -39,6 +40,9 @@ class StagePlan:
     file_paths: dict = field(default_factory=dict)
     inputs: list[dict] = field(default_factory=list)
     scene_label: str = ""
+    #: an identical result (same key) to put in place instead of computing: a kept result of
+    #: the output folder or the result of an earlier stage of the run (see roughcontact.reuse)
+    source: Path | None = None
 
     @property
     def label(self) -> str:
@@ -87,11 +91,15 @@ def plan(scene: Scene, outdir: Path, targets: Iterable[str] | None = None, force
     for name in sorted(force - set(stages()) - {"all"}):
         raise UserError(f"no stage {name!r}{did_you_mean(name, sorted(stages()))}", key="--force")
     plans: list[StagePlan] = []
+    earlier: dict[str, Path] = {}  # key -> where the run will have that result
     for variant, sc in (("base", scene), *scene.variants.items()):
         keys: dict[str, str] = {}
         for st in needed_stages(sc, targets):
             p = _plan_stage(sc, variant, st, outdir, keys, targets, force, verify)
             keys[st.name] = p.key
+            if p.status != "fresh" and not force & {st.name, "all"}:
+                _find_identical(p, earlier, outdir)
+            earlier.setdefault(p.key, p.path)
             plans.append(p)
     used = list(dict.fromkeys(p.stage.name for p in plans))
     for name in sorted(force - set(used) - {"all"}):
@@ -99,16 +107,18 @@ def plan(scene: Scene, outdir: Path, targets: Iterable[str] | None = None, force
     return plans
 
 
-def _sha256(path: Path, param: str) -> str:
-    """sha256 of an input file; an unreadable file is the user's error, naming the file and key."""
-    try:
-        return store.file_sha256(path)
-    except OSError as exc:
-        raise UserError(f"cannot read: {exc.strerror or exc}", file=str(path), key=param) from None
+def _find_identical(p: StagePlan, earlier: dict[str, Path], outdir: Path) -> None:
+    """Where the run can take ``p``'s result from without computing it, said in its reasons."""
+    if p.key in earlier:
+        p.source = earlier[p.key]
+        p.reasons.append(f"identical to {p.source}")
+    elif (kept := reuse.stored(outdir, p.key)) is not None:
+        p.source = kept
+        p.reasons.append("an identical result of an earlier run is kept")
 
 
 def _plan_stage(scene, variant, st, outdir, keys, targets, force, verify=None) -> StagePlan:
-    params = {name: scene.get(name) for name in st.params}
+    params = {name: st.section_view(name, scene.get(name)) for name in st.params}
     absent = [name for name, value in params.items() if value is MISSING]
     if absent:
         raise UserError(f"missing required key (stage {st.name} needs it)", key=absent[0])
@@ -119,22 +129,22 @@ def _plan_stage(scene, variant, st, outdir, keys, targets, force, verify=None) -
             continue
         if isinstance(value, (list, tuple)):  # a `paths` parameter: several files, read one by one
             file_paths[f.param] = tuple(Path(v) for v in value)
-            inputs += [{"param": f"{f.param}[{i}]", "path": str(v), "sha256": _sha256(Path(v), f.param)}
-                       for i, v in enumerate(value)]
+            inputs += [reuse.input_entry(f"{f.param}[{i}]", v, scene.path, f.param) for i, v in enumerate(value)]
             continue
         file_paths[f.param] = Path(value)
-        inputs.append({"param": f.param, "path": str(value), "sha256": _sha256(Path(value), f.param)})
+        inputs.append(reuse.input_entry(f.param, value, scene.path, f.param))
     upstream = {up: keys[up] for up in (st.needed(scene.values) if st.needed else st.requires)}
     wanted = frozenset(t for t in targets if t in st.outputs and st.outputs[t].optional)
     record = {
         "stage": st.name,
         "version": st.version,
-        "parameters": params,
+        "parameters": reuse.key_parameters(params),  # file paths out: their hashes are the inputs
         "upstream": upstream,
         "inputs": {i["param"]: i["sha256"] for i in inputs},
         "optional_outputs": sorted(wanted),
     }
     key = store.content_key(record)
+    record["paths"] = {i["param"]: i["path"] for i in inputs}  # for messages only: not part of the key
     path = result_path(outdir, variant, st.name)
     if path.exists() and not path.is_file():
         raise UserError(f"is not a file, but the result of stage {st.name} goes there: move it away", file=str(path))
@@ -182,7 +192,8 @@ def _why_stale(stored: dict, record: dict) -> list[str]:
             reasons.append(f"upstream stage {name} changed")
     for name in sorted(set(old_inputs) | set(record["inputs"])):
         if old_inputs.get(name) != record["inputs"].get(name):
-            reasons.append(f"input file {name} changed (sha256)")
+            shown = record.get("paths", {}).get(name)
+            reasons.append(f"input file {name}{f' ({shown})' if shown else ''} changed (sha256)")
     if sorted(old_optional) != record["optional_outputs"]:
         reasons.append(f"optional outputs {old_optional} -> {record['optional_outputs']}")
     return reasons or ["key differs"]
@@ -226,21 +237,9 @@ def _finish(ds: xr.Dataset, p: StagePlan) -> xr.Dataset:
         attrs.update(stamp)
     extra = dict(ds.attrs)
     ds.attrs = {**extra, **store.provenance_attrs(
-        stage=st.name, version=st.version, key=p.key, parameters=p.params, upstream=p.record["upstream"],
+        stage=st.name, version=st.version, key=p.key, parameters=p.record["parameters"], upstream=p.record["upstream"],
         inputs=p.inputs, optional=list(p.wanted), scene=p.scene_label, variant=p.variant)}
     return ds
-
-
-class Reporter:
-    """Progress messages per stage, on stderr (quiet in tests if asked)."""
-
-    def __init__(self, stream: TextIO | None = sys.stderr):
-        self.stream = stream
-
-    def __call__(self, message: str) -> None:
-        if self.stream is not None:
-            print(message, file=self.stream, flush=True)
-
 
 
 #: results larger than this many bytes are handed downstream lazily (dask-backed), not loaded
@@ -249,8 +248,12 @@ LOAD_LIMIT_BYTES = preflight.LOAD_LIMIT_BYTES
 
 def run(scene: Scene, outdir: Path, targets: Iterable[str] | None = None, force: Iterable[str] = (),
         report: Reporter | None = None, scheduler: str | None = None,
-        lock_timeout: float | None = None, verify: bool | None = None) -> dict[str, dict[str, xr.Dataset]]:
+        open_results: bool = True, lock_timeout: float | None = None,
+        verify: bool | None = None) -> dict[str, StageResults]:
     """Bring every needed stage up to date; return ``results[variant][stage]``.
+
+    With ``open_results`` every result is opened before this returns (in memory if small, so that
+    it outlives its file); False opens each only when first read (the command line reads none).
 
     ``scheduler`` overrides the scene's ``[run] scheduler`` ('threads', 'processes',
     'synchronous' or a dask.distributed address). Small results are returned in memory, large
@@ -264,7 +267,10 @@ def run(scene: Scene, outdir: Path, targets: Iterable[str] | None = None, force:
     report = report or Reporter()
     outdir = preflight.output_folder(outdir)
     with preflight.locked(outdir, report, lock_timeout), open_scheduler(scheduler or scene.get("run.scheduler")) as compute_with:
-        return _run(scene, outdir, targets, force, report, compute_with, verify)
+        results = _run(scene, outdir, targets, force, report, compute_with, verify)
+    for by_stage in results.values() if open_results else ():
+        by_stage.open_all()
+    return results
 
 
 def _run(scene, outdir, targets, force, report, compute_with, verify=None):
@@ -275,19 +281,25 @@ def _run(scene, outdir, targets, force, report, compute_with, verify=None):
     store.clean_temporaries(outdir)
     for folder in {p.path.parent for p in plans}:
         store.clean_temporaries(folder)
-    results: dict[str, dict[str, xr.Dataset]] = {v: {} for v in scenes}
+    results = {v: StageResults(_open) for v in scenes}  # each result opened when first read
     # read every input file, run every validation and check every size before anything computes or is written
     files, previews = preflight.validate(plans, scenes, outdir)
-    for note in notes(plans, previews):
-        report(f"note: {note}")
+    for note in notes(plans, previews):  # on a terminal; `plan` prints them always
+        report.live(f"note: {note}")
     n = len(plans)
     for i, p in enumerate(plans, start=1):
         tag = f"[{i}/{n}] {p.label}"
         if p.status == "fresh":
             report(f"{tag}: up to date ({p.path})")
-            results[p.variant][p.stage.name] = _open(p.path)
+            results[p.variant].add(p.stage.name, p.path)
             continue
-        report(f"{tag}: computing ({'; '.join(p.reasons)})")
+        if p.source is not None:
+            reuse.place(p.source, p.path, outdir)
+            report(f"{tag}: reused, not recomputed ({'; '.join(p.reasons)}) -> {p.path}")
+            results[p.variant].add(p.stage.name, p.path)
+            continue
+        why = "; ".join(p.reasons)
+        report.live(f"{tag}: computing ({why})")
         t0 = time.perf_counter()
         upstream = {up: results[p.variant][up] for up in p.record["upstream"]}
         chunks = stage_chunks(scenes[p.variant], p.stage, p.params, p.wanted, {**upstream, **_own(previews, p)})
@@ -298,13 +310,18 @@ def _run(scene, outdir, targets, force, report, compute_with, verify=None):
             wanted=p.wanted,
             chunks=chunks,
             stage=p.stage.name,
+            reporter=report,
         )
         with xr.set_options(keep_attrs=False):  # a variable's units come from its declaration, never by inheritance
             computed = p.stage.compute(inp)
         ds = _finish(computed, p)
-        store.write(ds, p.path, compute_with=compute_with, progress_stream=report.stream)
-        results[p.variant][p.stage.name] = _open(p.path)
-        report(f"{tag}: done in {time.perf_counter() - t0:.2f} s -> {p.path}")
+        reuse.retire(p.path, outdir)  # the result it replaces stays reusable under its key
+        store.write(ds, p.path, compute_with=compute_with, progress=report,
+                    compress=scenes[p.variant].get("run.compress"))
+        report.finish()
+        results[p.variant].add(p.stage.name, p.path)
+        report(f"{tag}: computed in {time.perf_counter() - t0:.2f} s ({why}) -> {p.path}")
+    reuse.prune(outdir, [p.path for p in plans])
     return results
 
 

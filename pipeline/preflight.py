@@ -122,14 +122,23 @@ def _in_variant(variant: str) -> Iterator[None]:
         raise UserError(f"{exc.message} (variant {variant})", file=exc.file, key=exc.key) from None
 
 
+def _stored(p) -> bool:
+    """Whether the plan's result exists already: fresh, or to be taken from an identical one."""
+    return p.status == "fresh" or getattr(p, "source", None) is not None
+
+
 def validate(plans, scenes: dict, outdir: Path) -> tuple[dict[int, dict], dict[tuple[str, str], Preview]]:
     """Read the input files and run the checks of every stage about to compute: first each stage's
     ``check`` (its own keys and files: the cause), then each ``validate`` with the previews of its
     upstream results (what follows from them), upstream first; then check the sizes. Returns the
-    loaded files per plan index and the previews per (variant, stage)."""
+    loaded files per plan index and the previews per (variant, stage). A result put in place from an
+    identical one (``p.source``, roughcontact.reuse) counts as stored; with nothing to compute, nothing
+    is read at all (a rerun stays fast)."""
     files: dict[int, dict] = {}
+    if all(_stored(p) for p in plans):
+        return files, {}
     for i, p in enumerate(plans):
-        if p.status != "fresh":
+        if not _stored(p):
             with _in_variant(p.variant):
                 files[i] = {param: read_input(p.stage, param, path, p.params) for param, path in p.file_paths.items()}
                 if p.stage.check is not None:
@@ -138,6 +147,7 @@ def validate(plans, scenes: dict, outdir: Path) -> tuple[dict[int, dict], dict[t
     spanned: dict[tuple[str, str], dict[str, int]] = {}
     stored: dict[tuple[str, str], int] = {}  # bytes of each result, estimated or on disk
     estimates = []
+    planned: dict[Path, tuple[str, str]] = {}  # result path -> its (variant, stage)
     in_flight = max(2, 2 * (os.cpu_count() or 2))
     for i, p in enumerate(plans):
         here = (p.variant, p.stage.name)
@@ -149,9 +159,13 @@ def validate(plans, scenes: dict, outdir: Path) -> tuple[dict[int, dict], dict[t
         spanned[here] = dims
         lazy = frozenset(d for up in ups if stored.get((p.variant, up), 0) > LOAD_LIMIT_BYTES
                          for d in spanned.get((p.variant, up), {}))
-        if p.status == "fresh":
-            previews[here] = stored_preview(p.path)
-            stored[here] = p.path.stat().st_size
+        if _stored(p):
+            where = p.path if p.status == "fresh" else p.source
+            if where in planned:  # identical to a result computed earlier in this run: its preview
+                previews[here], stored[here] = previews[planned[where]], stored[planned[where]]
+            else:
+                previews[here], stored[here] = stored_preview(where), where.stat().st_size
+            planned[p.path] = here
             continue
         with _in_variant(p.variant):
             own = p.stage.validate(StageInput(params=p.params, upstream=upstream, files=files[i], wanted=p.wanted,
@@ -160,5 +174,6 @@ def validate(plans, scenes: dict, outdir: Path) -> tuple[dict[int, dict], dict[t
         stored[here] = estimates[-1].result
         own = own if own is not None else Preview()
         previews[here] = dataclasses.replace(own, sizes={**dims, **own.sizes})  # with the sweep dims it spans
+        planned[p.path] = here
     sizing.check(estimates, outdir)
     return files, previews

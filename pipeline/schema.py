@@ -27,6 +27,9 @@ class _Missing:
     def __repr__(self) -> str:
         return "<missing>"
 
+    def __reduce__(self):  # one object, also after a round trip through pickle (the scene cache)
+        return "MISSING"
+
 
 MISSING = _Missing()
 
@@ -108,7 +111,9 @@ class Param:
             values = parse_sweep(raw, self.units, key, difference=self.difference)
             for v in np.atleast_1d(values):
                 self._bounded(float(v), key)
-            return values
+            # a sweep becomes a coordinate, which CF wants strictly monotonic: increasing, whatever
+            # order the scene lists it in (results do not depend on the order)
+            return np.sort(values) if k == "sweep" and isinstance(values, np.ndarray) else values
         if k == "int":
             if isinstance(raw, bool) or not isinstance(raw, int):
                 raise UserError(f"expected a whole number, got {raw!r}", key=key)

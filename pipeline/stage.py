@@ -35,8 +35,8 @@ from .units import readable
 
 __all__ = [
     "ComputationError", "FileInput", "Figure", "MISSING", "Param", "Preview", "REQUIRED", "SceneWarning", "Section",
-    "Stage", "StageInput", "UserError", "Var", "coords", "readable", "register", "register_coords", "register_params",
-    "register_section",
+    "SectionKeys", "Stage", "StageInput", "UserError", "Var", "coords", "readable", "register", "register_coords",
+    "register_params", "register_section",
 ]
 
 
@@ -133,9 +133,8 @@ class Stage:
     #: result (of the stored file when it is fresh, else what the upstream stage's validate returned):
     #: its dimensions' sizes and coordinate ranges, never data. Return a :class:`Preview` of this
     #: stage's own result (the dimensions it adds, e.g. the q grid) for the checks and size estimates
-    #: downstream (its ``attrs["note"]``, if any, is a line ``plan`` and ``run`` print for the user, e.g.
-    #: the reference wavenumber of zeta). It may warn with :class:`SceneWarning` (a request that is
-    #: valid but probably not meant).
+    #: downstream (``plan`` and ``run`` print its ``attrs["note"]``, e.g. the reference wavenumber of
+    #: zeta). It may warn with :class:`SceneWarning` (a request that is valid but probably not meant).
     validate: Callable[["StageInput"], "Preview | None"] | None = None
     #: optional ``result_bytes(params, wanted, sizes) -> int``: bytes of the stored result given the
     #: sizes of all its dimensions (sweep dims and the ones the stage adds); default: every output
@@ -148,6 +147,50 @@ class Stage:
     #: sweep dimensions the stage's computation couples (e.g. a derivative along ``p``): the
     #: engine never chunks them, whatever the scene's ``[numerics] chunks`` says
     unchunked: tuple[str, ...] = ()
+    #: of a whole section named in ``params`` whose tables have a ``kind`` (``[substrate]``,
+    #: ``[solid]``), the keys the stage reads for each kind: ``{section: {kind: keys, "*": keys}}``
+    #: ("*": every kind not listed; a kind in neither: every key). The stage is handed, and its
+    #: content key covers, only these keys and ``kind`` (e.g. the topography stage reads a
+    #: measured surface's map keys, not its ``extend``, which only the psd stage reads).
+    reads: Mapping[str, Mapping[str, tuple[str, ...]]] = field(default_factory=dict)
+
+    def section_view(self, name: str, value):
+        """What the stage is handed of the scene value ``value`` of its declared key ``name``:
+        the value itself, or, for a section in :attr:`reads`, a :class:`SectionKeys` of the keys
+        the stage reads."""
+        if name not in self.reads or not isinstance(value, Mapping):
+            return value
+        by_kind = self.reads[name]
+        keys = by_kind.get(value.get("kind"), by_kind.get("*"))
+        if keys is None:
+            return value
+        return SectionKeys({k: v for k, v in value.items() if k == "kind" or k in keys},
+                           hidden=frozenset(value) - set(keys) - {"kind"}, where=f"stage {self.name}, [{name}]")
+
+
+class SectionKeys(dict):
+    """The keys of a scene section a stage declared it reads (:attr:`Stage.reads`); reading one
+    it did not declare is an error (a bug in the stage), so a stage's key covers what it reads."""
+
+    def __init__(self, values, hidden=frozenset(), where=""):
+        super().__init__(values)
+        self.hidden, self.where = hidden, where
+
+    def _refuse(self, key):
+        raise KeyError(f"{self.where} reads key {key!r} that it does not declare in its reads (a bug in the stage)")
+
+    def __missing__(self, key):
+        if key in self.hidden:
+            self._refuse(key)
+        raise KeyError(key)
+
+    def get(self, key, default=None):
+        if key in self.hidden:
+            self._refuse(key)
+        return super().get(key, default)
+
+    def __reduce__(self):  # picklable for process and distributed schedulers
+        return (SectionKeys, (dict(self), self.hidden, self.where))
 
 
 @dataclass(frozen=True)
@@ -169,8 +212,7 @@ class Preview:
     keys: Mapping[str, str] = field(default_factory=dict)
     #: the values of (small) 1-D coordinates, where known in advance (e.g. the magnifications)
     coords: Mapping[str, np.ndarray] = field(default_factory=dict)
-    #: the finite values of (small) 1-D data variables, where known in advance (e.g. the mean
-    #: wavenumbers of measured bins, between which a measured PSD is interpolated)
+    #: finite values of (small) 1-D data variables known in advance (e.g. measured bins' mean q)
     values: Mapping[str, np.ndarray] = field(default_factory=dict)
 
     @classmethod
@@ -216,6 +258,15 @@ class StageInput:
     wanted: frozenset[str] = frozenset()
     chunks: Mapping[str, int] = field(default_factory=dict)
     stage: str = "?"
+    #: the engine's :class:`roughcontact.progress.Reporter` (None: no progress shown)
+    reporter: Any = None
+
+    def progress(self, what: str, total: int | None = None, unit: str = "step") -> Callable[..., None]:
+        """A callable ``tick(n=1)`` advancing a progress bar of ``what`` (on a terminal; a no-op
+        elsewhere and in worker processes): hand it to a long kernel as its ``progress``."""
+        from .progress import Tick
+
+        return Tick() if self.reporter is None else self.reporter.bar(f"{self.stage}: {what}", total, unit)
 
     def __getitem__(self, key: str):
         try:
@@ -373,6 +424,26 @@ def check_declarations(all_stages: Mapping[str, Stage], all_sections: Mapping[st
         for up in st.requires:
             if up not in all_stages:
                 raise ValueError(f"stage {st.name} requires {up!r}, which is not a stage")
+        _check_reads(st, all_sections)
         shared = sorted(set(st.coords) & set(shared_coords))
         if shared:
             raise ValueError(f"stage {st.name} redeclares the shared coordinate(s) {shared}")
+
+
+def _check_reads(st: Stage, all_sections: Mapping[str, Section]) -> None:
+    """Every section in a stage's ``reads`` is one of its whole-section params with kinds, and
+    every key it names exists for that kind."""
+    for name, by_kind in st.reads.items():
+        if name not in st.params or name not in all_sections or not all_sections[name].discriminator:
+            raise ValueError(f"stage {st.name} selects keys of {name!r}, which is not a whole section with kinds "
+                             f"in its params")
+        sec = all_sections[name]
+        for kind, keys in by_kind.items():
+            if kind != "*" and kind not in sec.variants:
+                raise ValueError(f"stage {st.name} reads keys of [{name}] kind {kind!r}, which does not exist")
+            names = {p.name for p in sec.params}
+            names |= {p.name for ps in sec.variants.values() for p in ps} if kind == "*" else {
+                p.name for p in sec.variants[kind]}
+            unknown = sorted(set(keys) - names)
+            if unknown:
+                raise ValueError(f"stage {st.name} reads {unknown} of [{name}] kind {kind!r}: no such key")

@@ -22,7 +22,7 @@ from typing import Any, Mapping
 import numpy as np
 import xarray as xr
 
-from . import __version__, integrity, ncio
+from . import __version__, cf, integrity, ncio
 from .errors import OutputError
 
 TMP_PREFIX = ".tmp-"
@@ -65,17 +65,37 @@ def file_sha256(path: Path) -> str:
 
 @functools.cache
 def git_commit() -> str:
-    """Commit of the roughcontact source tree, where it is a git checkout ('unknown' otherwise)."""
+    """The commit of the running roughcontact: from git where the package runs from its checkout
+    (an editable install; ``-dirty`` with uncommitted changes), else the one setuptools-scm
+    recorded when the installed package was built."""
     here = Path(__file__).resolve().parent.parent
     try:
-        out = subprocess.run(["git", "-C", str(here), "rev-parse", "HEAD"], capture_output=True, text=True, timeout=5)
-        if out.returncode == 0:
+        top = subprocess.run(["git", "-C", str(here), "rev-parse", "--show-toplevel"], capture_output=True,
+                             text=True, timeout=5)
+        if top.returncode == 0 and Path(top.stdout.strip()).resolve() == here:
+            head = subprocess.run(["git", "-C", str(here), "rev-parse", "HEAD"], capture_output=True, text=True,
+                                  timeout=5).stdout.strip()
             dirty = subprocess.run(["git", "-C", str(here), "status", "--porcelain", "--untracked-files=no"],
                                    capture_output=True, text=True, timeout=5).stdout.strip()
-            return out.stdout.strip() + ("-dirty" if dirty else "")
+            if head:
+                return head + ("-dirty" if dirty else "")
     except (OSError, subprocess.SubprocessError):
         pass
-    return "unknown"
+    return built_commit()
+
+
+def built_commit() -> str:
+    """The commit the installed package was built from, as setuptools-scm recorded it, with
+    ``-dirty`` if the tree had uncommitted changes."""
+    import importlib
+
+    built = importlib.import_module(f"{__package__}._version")  # written at build time, with __version__
+    commit = getattr(built, "commit_id", None)
+    if not commit:
+        return "unknown (built without git metadata)"
+    local = built.__version__.partition("+")[2].split(".")
+    dirty = any(part.startswith("d") and part[1:].isdigit() for part in local)
+    return commit.removeprefix("g") + ("-dirty" if dirty else "")  # git nodes are written g<hash>
 
 
 def utc_now() -> str:
@@ -119,12 +139,13 @@ def _encodable(ds: xr.Dataset) -> xr.Dataset:
     return ds
 
 
-def write(ds: xr.Dataset, path: Path, compute_with="threads", progress_stream=None) -> None:
+def write(ds: xr.Dataset, path: Path, compute_with="threads", progress=None, compress: bool = True) -> None:
     """Write ``ds`` to ``path`` atomically: a temporary file in the same folder, then a rename.
 
     Dask-backed variables are computed block by block by ``compute_with`` (a dask scheduler
     name or a distributed Client) and written from this process (:func:`pipeline.compute.write_blocks`),
-    so a result never has to fit in memory. A crash or kill while writing leaves at most a
+    so a result never has to fit in memory (``progress``: a :class:`roughcontact.progress.Reporter`
+    showing the blocks written; ``compress``: large variables zlib-compressed, :mod:`roughcontact.cf`). A crash or kill while writing leaves at most a
     ``.tmp-*`` file, which is never read as a result (and is removed by :func:`clean_temporaries`).
     The file gets a checksum of its data and attributes (:mod:`roughcontact.integrity`). A file
     that cannot be written (full disk, no permission) is an :class:`OutputError` naming it, raised
@@ -138,14 +159,16 @@ def write(ds: xr.Dataset, path: Path, compute_with="threads", progress_stream=No
         path.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(prefix=f"{TMP_PREFIX}{path.name}.{_owner()}.", dir=path.parent)
         os.close(fd)
+        os.chmod(tmp, new_file_mode())  # mkstemp makes it 0600; a result is a file like any other
         ds = _encodable(ds)
         lazy = dask_variables(ds)
+        eager = ds.drop_vars(lazy)
         with ncio.locked():
-            ds.drop_vars(lazy).to_netcdf(tmp, engine="netcdf4")
+            eager.to_netcdf(tmp, engine="netcdf4", encoding=cf.encoding(eager, compress))
         sums = integrity.Checksums({name: ds[name].variable.chunks for name in lazy})
         if lazy:
-            _define(tmp, ds, lazy)
-            write_blocks(tmp, ds, lazy, compute_with, progress_stream, checksums=sums)
+            _define(tmp, ds, lazy, compress)
+            write_blocks(tmp, ds, lazy, compute_with, progress, checksums=sums)
         integrity.stamp(tmp, sums.known())
         with open(tmp, "rb+") as fh:
             os.fsync(fh.fileno())
@@ -157,6 +180,13 @@ def write(ds: xr.Dataset, path: Path, compute_with="threads", progress_stream=No
         if why is not None:
             raise OutputError(f"cannot write this result ({why}); nothing of it was kept", file=str(path)) from None
         raise
+
+
+def new_file_mode() -> int:
+    """The permissions the user's umask gives a new file (0644 under umask 022)."""
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return 0o666 & ~mask
 
 
 def _owner() -> str:
@@ -181,7 +211,7 @@ def _why(exc: BaseException, path: Path) -> str:
     return f"{text}; the disk had {free / 1e6:.3g} MB free when it failed" if free < 2**30 else text
 
 
-def _define(path, ds: xr.Dataset, names: list[str]) -> None:
+def _define(path, ds: xr.Dataset, names: list[str], compress: bool = True) -> None:
     """Declare the lazily computed variables in the file, with their attributes."""
     import netCDF4
 
@@ -191,8 +221,7 @@ def _define(path, ds: xr.Dataset, names: list[str]) -> None:
             for dim in var.dims:
                 if dim not in nc.dimensions:
                     nc.createDimension(dim, ds.sizes[dim])
-            fill = np.nan if np.issubdtype(var.dtype, np.floating) else None
-            target = nc.createVariable(name, var.dtype, var.dims, fill_value=fill)
+            target = nc.createVariable(name, var.dtype, var.dims, **cf.lazy_variable(ds, name, compress))
             target.setncatts(dict(var.attrs))
         coords = [n for n in names if n in ds.coords and n not in ds.dims]
         for name in ds.data_vars:
@@ -229,9 +258,9 @@ def read_attrs(path: Path) -> dict | None:
     """Global attributes of a stored result, or None if the file is missing or unreadable."""
     if not Path(path).is_file():
         return None
-    try:
-        with ncio.locked(), xr.open_dataset(path) as ds:
-            return dict(ds.attrs)
+    try:  # with netCDF4 directly: opening with xarray would import dask and pint for nothing
+        with ncio.dataset(path) as nc, ncio.locked():
+            return {k: nc.getncattr(k) for k in nc.ncattrs()}
     except Exception:  # a truncated or foreign file is simply not a valid result
         return None
 

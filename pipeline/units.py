@@ -1,6 +1,8 @@
 """The one unit parser: quantities given as strings ("1 nm", "77.2 GPa", "2e8 1/m") -> SI floats.
 
-Everything inside roughcontact is SI; this module is the only place that talks to pint.
+Everything inside roughcontact is SI; this module is the only place that talks to pint, which
+is imported, and its registry built, only when a quantity is parsed (a rerun whose scene is
+unchanged takes its parsed values from :mod:`roughcontact.scenecache` and never does).
 """
 
 from __future__ import annotations
@@ -9,7 +11,6 @@ import functools
 import re
 
 import numpy as np
-import pint
 
 from .errors import UserError
 
@@ -17,13 +18,18 @@ _NUMBER = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(.*?)\s
 
 
 @functools.cache
-def registry() -> pint.UnitRegistry:
-    ureg = pint.UnitRegistry()
+def registry() -> "pint.UnitRegistry":
+    import pint
+
+    try:  # pint's own on-disk cache of its parsed definitions: a second start builds it in a fraction
+        ureg = pint.UnitRegistry(cache_folder=":auto:")
+    except OSError:  # no writable cache folder
+        ureg = pint.UnitRegistry()
     ureg.define("angstrom_alias = angstrom = Å")
     return ureg
 
 
-def _unit(text: str, key: str | None) -> pint.Unit:
+def _unit(text: str, key: str | None) -> "pint.Unit":
     try:
         return registry().Unit(text)
     except Exception as exc:  # pint raises several types for unparsable units
@@ -93,9 +99,11 @@ def _convert(number: float, unit_text: str, units: str, key: str | None, differe
     if difference:
         src = _as_difference(src)
     dst = _unit(units, key) if units not in ("", "1") else ureg.dimensionless
+    from pint import DimensionalityError
+
     try:
         return float(ureg.Quantity(number, src).to(dst).magnitude)
-    except pint.DimensionalityError:
+    except DimensionalityError:
         raise UserError(
             f"'{number:g} {unit_text}' is not convertible to {units or 'a dimensionless number'}", key=key
         ) from None

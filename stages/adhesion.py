@@ -92,7 +92,7 @@ def _where(labels, names, bad) -> str:
     return ", ".join(parts) or "the only case"
 
 
-def _partial_kernel(C, c0, c1, *labels, q, E_star, delta_gamma, sigma0, zeta, K_min, tol, names):
+def _partial_kernel(C, c0, c1, *labels, q, E_star, delta_gamma, sigma0, zeta, K_min, tol, names, progress=None):
     """apply_ufunc kernel: the partial-contact solution for every case of the sweep, in SI
     (gamma_eff(1), P(zeta), gamma_eff(zeta), sigma_a(zeta), full-contact gamma_eff, F)."""
     shape = np.broadcast_shapes(C.shape[:-1], np.shape(c0), np.shape(c1), *(np.shape(v) for v in labels))
@@ -101,7 +101,7 @@ def _partial_kernel(C, c0, c1, *labels, q, E_star, delta_gamma, sigma0, zeta, K_
     c1f = np.broadcast_to(c1, shape).reshape(-1)
     prob = AdhesionProblem(q, Cf, E_star, delta_gamma, zeta)
     try:
-        sol = solve_partial_contact(prob, sigma0, c0f, c1f, K_min=K_min, tol=tol)
+        sol = solve_partial_contact(prob, sigma0, c0f, c1f, K_min=K_min, tol=tol, progress=progress)
     except ComputationError as exc:
         lab = [np.broadcast_to(v, shape).reshape(-1) for v in labels]
         where = _where(lab, names, exc.failed) if hasattr(exc, "failed") else "?"
@@ -197,7 +197,8 @@ def compute_adhesion(inp: StageInput) -> xr.Dataset:
     nodes = zeta_grid(q[-1] / q[0], inp["numerics.adhesion_points_per_decade"], offset)
     model, c0, c1 = _models(spec)
     g1, P, g, sa, full, F = _partial(psd["psd_combined"], c0, c1, nodes, q=q, E_star=E_star, delta_gamma=dg,
-                                     sigma0=sigma0, K_min=K_min, tol=tol)
+                                     sigma0=sigma0, K_min=K_min, tol=tol,
+                                     progress=inp.progress("partial-contact marches", unit="march"))
     if "model" in full.dims:  # the full-contact theory and F do not depend on the S_el model
         full, F = full.isel(model=0, drop=True), F.isel(model=0, drop=True)
     ds = xr.Dataset({
@@ -210,7 +211,8 @@ def compute_adhesion(inp: StageInput) -> xr.Dataset:
     ds.attrs["load"] = "zero load" if sigma0 == 0 else f"nominal stress sigma0 = {sigma0:g} Pa"
     if spec["vanishing_hrms"]:
         ds = ds.compute()
-        ds["hrms_substrate_vanishing"] = _vanishing(ds, psd, c0, c1, q, E_star, dg, nodes, K_min, tol, sigma0)
+        ds["hrms_substrate_vanishing"] = _vanishing(ds, psd, c0, c1, q, E_star, dg, nodes, K_min, tol, sigma0,
+                                                    inp.progress("vanishing-hrms marches", unit="march"))
     return ds
 
 
@@ -231,7 +233,7 @@ def _vanishing_kernel(K, C1, C2, eta, c0, c1, *, hs, **kwargs):
     return h.reshape(shape), status.reshape(shape)
 
 
-def _vanishing(ds, psd, c0, c1, q, E_star, dg, nodes, K_min, tol, sigma0):
+def _vanishing(ds, psd, c0, c1, q, E_star, dg, nodes, K_min, tol, sigma0, progress=None):
     """The substrate hrms at which adhesion vanishes, per case (zero load and an hrms sweep: checked by
     validate_adhesion); a UserError when the sweep does not bracket it."""
     hs = psd["hrms_substrate"].values
@@ -245,7 +247,8 @@ def _vanishing(ds, psd, c0, c1, q, E_star, dg, nodes, K_min, tol, sigma0):
             _vanishing_kernel, K, C1, C2, eta, c0, c1,
             input_core_dims=[["hrms_substrate"], ["hrms_substrate", "q"], ["q"], [], [], []],
             output_core_dims=[[], []], output_dtypes=[float, int],
-            kwargs=dict(hs=hs[order], q=q, E_star=E_star, delta_gamma=dg, zeta=nodes, K_min=K_min, tol=tol),
+            kwargs=dict(hs=hs[order], q=q, E_star=E_star, delta_gamma=dg, zeta=nodes, K_min=K_min, tol=tol,
+                        progress=progress),
         )
     except ComputationError as exc:
         cases = ", ".join(f"{d} = {list(np.atleast_1d(K[d].values))}" for d in K.dims if d != "hrms_substrate" and d in K.coords)

@@ -26,7 +26,7 @@ from roughcontact.stage import (
 
 from .figures.bem import figure_bem_comparison, figure_bem_reduced_pressure
 from .maps import check_eta, map_band, map_surfaces, measured_maps, topography_files
-from .shared import E_STAR, MATERIAL_KEYS, e_star
+from .shared import E_STAR, MAP_KEYS, MATERIAL_KEYS, e_star, surface_reads
 from .variants import VARIANT_KEYS, VARIANTS, theory_variants, variant_attrs
 
 #: the optional dependency and how to install it (named in the error without it)
@@ -104,7 +104,7 @@ def _at_zeta(ds: xr.Dataset, var: str, zeta: float, stage: str, set_by: str) -> 
     return da.isel(zeta=index) if "zeta" in da.dims else da
 
 
-def _single_surfaces(sizes) -> None:
+def single_surfaces(sizes) -> None:
     """The BEM solves one pair of surfaces: no hrms sweep, no spectrum draws."""
     for name in ("substrate", "solid"):
         if sizes.get(f"hrms_{name}", 1) > 1:
@@ -126,7 +126,7 @@ def validate_bem(inp: StageInput) -> None:
     """Before anything computes: one pair of surfaces, and the BEM's magnification among those the
     contact and separation stages compute."""
     psd = inp.upstream["psd"]
-    _single_surfaces(psd.sizes)
+    single_surfaces(psd.sizes)
     names = map_surfaces(inp)
     lo, hi = psd.ranges["q"]
     n_w = inp["bem.pixels_per_wavelength"]
@@ -141,7 +141,7 @@ def validate_bem(inp: StageInput) -> None:
             _zeta_index(values, zeta, stage, limit)
 
 
-def _band(inp: StageInput, q: np.ndarray, names: tuple[str, ...]) -> dict:
+def bem_band(inp: StageInput, q: np.ndarray, names: tuple[str, ...]) -> dict:
     """The map and its band: grid n, side L, pixel dx, q_cut, zeta_bem, what limits them, the
     realizations and seed, and (measured) the band-limited maps."""
     n_w = inp["bem.pixels_per_wavelength"]
@@ -160,7 +160,7 @@ def _band(inp: StageInput, q: np.ndarray, names: tuple[str, ...]) -> dict:
     return dict(n=n, R=1, seed=None, L=L, dx=dx, q_cut=q_cut, zeta=zeta_bem, limit=limit, maps=maps, h=h_maps)
 
 
-def _eta_values(inp: StageInput, psd: xr.Dataset, names, C1, C2) -> np.ndarray:
+def bem_eta_values(inp: StageInput, psd: xr.Dataset, names, C1, C2) -> np.ndarray:
     """The coherences solved for: NaN alone when eta(q) is measured (in the maps and in the
     theory's combined PSD), the psd stage's eta sweep, or the scene's single value."""
     if names or isinstance(inp["interface.eta"], str):
@@ -172,31 +172,34 @@ def _eta_values(inp: StageInput, psd: xr.Dataset, names, C1, C2) -> np.ndarray:
     return np.atleast_1d(float(np.atleast_1d(inp["interface.eta"])[0]))
 
 
+def map_pairs(band: dict, q, C1, C2, eta_values):
+    """(eta index, realization, h1, h2) of every map pair to solve on: the measured maps, or for
+    each realization the synthesized pair at every eta (the same noise for every eta)."""
+    if band["maps"] is not None:
+        yield 0, 0, band["h"]["substrate"], band["h"]["solid"]
+        return
+    for r in range(band["R"]):
+        noise = white_noise_pair(band["n"], band["seed"], r, band=band["zeta"])
+        for j, eta in enumerate(eta_values):
+            yield (j, r) + synthesize_pair(q, C1, C2, eta, band["n"], band["q_cut"], noise=noise)
+
+
 def _solve_all(inp, band, q, C1, C2, E_star, p_values, eta_values, edges) -> dict:
     """Every map pair solved at every pressure: area, gap, histogram and overflow over
     (p, eta, realization), and the composite's rms height and slope over (eta, realization)."""
-    n, R, dx = band["n"], band["R"], band["dx"]
-
-    def pairs():
-        """(eta index, realization, h1, h2) of every map pair to solve on."""
-        if band["maps"] is not None:
-            yield 0, 0, band["h"]["substrate"], band["h"]["solid"]
-            return
-        for r in range(R):
-            noise = white_noise_pair(n, band["seed"], r, band=band["zeta"])
-            for j, eta in enumerate(eta_values):
-                yield (j, r) + synthesize_pair(q, C1, C2, eta, n, band["q_cut"], noise=noise)
-
+    R, dx = band["R"], band["dx"]
     shape = (p_values.size, eta_values.size, R)
     out = {k: np.empty(shape) for k in ("area", "mean_gap", "overflow")}
     out["histogram"] = np.empty(shape + (edges.shape[-1] - 1,))
     out["hrms"], out["slope"] = np.empty(shape[1:]), np.empty(shape[1:])
     order = np.argsort(p_values)  # increasing load: each solve starts from the previous one
-    for j, r, h1, h2 in pairs():
+    tick = inp.progress("BEM solves", total=p_values.size * (1 if band["maps"] is not None else R * eta_values.size),
+                        unit="solve")
+    for j, r, h1, h2 in map_pairs(band, q, C1, C2, eta_values):
         out["hrms"][j, r] = float(np.std(h1 - h2))
         out["slope"][j, r] = rms_slope_of_map(h1 - h2, dx)
         res = solve_pair(h1, h2, dx, E_star, p_values[order], tolerance=inp["numerics.bem_tolerance"],
-                         stress_edges=edges[order, j])
+                         stress_edges=edges[order, j], progress=tick)
         for k in ("area", "mean_gap", "histogram", "overflow"):
             out[k][order, j, r] = res[k]
     return out
@@ -241,12 +244,12 @@ def _describe(inp: StageInput, ds: xr.Dataset, band: dict) -> None:
 def compute_bem(inp: StageInput) -> xr.Dataset:
     psd = inp.upstream["psd"]
     q = psd["q"].values
-    _single_surfaces(psd.sizes)
+    single_surfaces(psd.sizes)
     C1, C2 = psd["psd_substrate"].values, psd["psd_solid"].values
     E_star = e_star(inp)
     names = map_surfaces(inp)
     check_eta(inp, names)
-    band = _band(inp, q, names)
+    band = bem_band(inp, q, names)
     zeta_bem, limit = band["zeta"], band["limit"]
     contact, separation = inp.upstream["contact"], inp.upstream["separation"]
     G = _at_zeta(contact, "G", zeta_bem, "contact", limit)
@@ -254,7 +257,7 @@ def compute_bem(inp: StageInput) -> xr.Dataset:
     theory_gap = _at_zeta(separation, "mean_separation", zeta_bem, "separation", limit)
     p_values = np.atleast_1d(np.asarray(inp["load.p"], dtype=float))
     has_eta = "eta" in psd["psd_combined"].dims
-    eta_values = _eta_values(inp, psd, names, C1, C2)
+    eta_values = bem_eta_values(inp, psd, names, C1, C2)
     nb = inp["numerics.bem_stress_bins"]
     level = (np.arange(nb) + 0.5) / nb
     # histogram edges per (p, eta): the contact stage's adaptive stress grid, top = p + width sqrt(G)
@@ -335,7 +338,9 @@ register(
         params=(*MATERIAL_KEYS, "load.p", "interface.eta", "substrate", "solid", "bem.surfaces",
                 "bem.grid", "bem.realizations", "bem.seed", "bem.pixels_per_wavelength", "numerics.bem_tolerance",
                 "numerics.bem_stress_bins", "numerics.sigma_width", *VARIANT_KEYS),
-        # measured maps (kind = "topography"): the engine reads them; used when bem.surfaces allows
+        # measured maps (kind = "topography"): the engine reads them; used when bem.surfaces allows.
+        # Synthesized surfaces come from the psd stage's spectra: of those sections, only the kind
+        reads=surface_reads({"topography": MAP_KEYS, "*": ()}),
         files=(topography_files("substrate"), topography_files("solid")),
         outputs={
             "bem_contact_area_ratio": Var("1", "relative contact area A/A0 from the BEM (fraction of pixels in "

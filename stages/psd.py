@@ -26,7 +26,7 @@ from roughcontact.stage import FileInput, Preview, Stage, StageInput, UserError,
 
 from .maps import measured_coherence_on_grid, measured_psd_on_grid
 from .measured import coherence_error_grid, drawn_coherence, drawn_psd, psd_error_grid
-from .shared import SURFACES, is_measured, is_rough, needs_topography, scope_attrs, surface_bands
+from .shared import SURFACES, is_measured, is_rough, needs_topography, scope_attrs, surface_bands, surface_reads
 
 
 def _check_extent(name: str, spec: dict, spectrum, lo: float, hi: float) -> None:
@@ -226,6 +226,8 @@ STAGE = register(
         compute=compute_psd,
         params=("substrate", "solid", "interface.eta", "grid.q_min", "grid.q_max", "numerics.points_per_decade",
                 "bands.draws", "bands.seed"),
+        # a measured surface's spectrum comes from the topography stage: of it, only how to extend it
+        reads=surface_reads({"topography": ("extend",), "container": ("extend",)}),
         files=(_files("substrate"), _files("solid")),
         requires=("topography",),
         needed=lambda values: ("topography",) if needs_topography(values) else (),

@@ -34,7 +34,9 @@ register_coords(
     hrms_substrate=Var("m", "rms roughness of the substrate"),
     hrms_solid=Var("m", "rms roughness of the solid"),
     v=Var("m/s", "sliding velocity"),
-    T=Var("K", "temperature"),
+    # CF has no standard name for the temperature of a solid (its temperature names are of the air, sea,
+    # soil, ...); CF-1.11's units_metadata says it is a temperature on its scale, not a difference
+    T=Var("K", "temperature", attrs={"units_metadata": "temperature: on_scale"}),
     omega=Var("rad/s", "angular frequency"),
     draw=Var("1", "spectrum draw: 0 = the measured spectrum, 1..N = spectra drawn within its statistical band",
              standard_name="realization"),
@@ -283,6 +285,18 @@ CONTAINER_PARAMS = (
           doc="polynomial removed before the FFT (default: the measurement's detrend_mode, else mean if periodic, else plane)"),
     *(p for p in TOPOGRAPHY_PARAMS if p.name in ("analysis", "window", "hurst", "extend")),
 )
+
+#: the keys of a measured surface (kind "topography") that reading and preparing its maps takes
+#: (units, sizes, detrending, window, analysis, reliability cutoffs); ``extend`` and ``hurst`` are not among them
+MAP_KEYS = ("files", "height_unit", "size_x", "size_y", "periodic", "analysis", "detrend", "window", "tip_radius",
+            "resolution", "q_reliable")
+#: the same for a contact.engineering container (kind "container"), whose metadata gives the rest
+CONTAINER_KEYS = ("container", "surface", "detrend", "analysis", "window")
+
+
+def surface_reads(by_kind: dict) -> dict:
+    """A stage's ``reads`` for both surface sections: the same keys of each per kind."""
+    return {name: dict(by_kind) for name in SURFACES}
 
 
 def _surface_section(name: str, doc: str) -> Section:

@@ -27,7 +27,7 @@ from roughcontact.stage import Figure, Param, Preview, Stage, StageInput, UserEr
 from .figures.topography import figure_coherence, figure_measured_psd
 from .maps import topography_files
 from .measured import container_files, merged_psd, mode_factor, prepared_files
-from .shared import SURFACES, is_measured
+from .shared import CONTAINER_KEYS, MAP_KEYS, SURFACES, is_measured, surface_reads
 
 register_params(
     "numerics",
@@ -175,6 +175,9 @@ register(
         version="2",
         compute=compute_topography,
         params=("substrate", "solid", "numerics.topography_bins_per_decade"),
+        # of a measured surface the map keys and the line-scan H; of any other surface only its kind
+        reads=surface_reads({"topography": (*MAP_KEYS, "hurst"), "container": (*CONTAINER_KEYS, "hurst"),
+                             "*": ()}),
         validate=validate_topography,
         files=(topography_files("substrate"), topography_files("solid"), container_files("substrate"),
                container_files("solid")),

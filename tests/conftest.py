@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import copy
+import re
 
 import pytest
 
@@ -83,3 +84,15 @@ def write_scene(tmp_path):
         return path
 
     return _write
+
+
+def cli_error_line(capsys, *args):
+    """Run the command line; return (exit code, its error line). --quiet still prints one line per
+    stage ("[1/2] psd: ..."); apart from those, a failure says one line and never a traceback."""
+    from roughcontact.cli import main
+
+    code = main(list(map(str, args)))
+    err = capsys.readouterr().err.strip()
+    err = "\n".join(line for line in err.splitlines() if not re.match(r"\[\d+/\d+\] ", line))
+    assert "Traceback" not in err and len(err.splitlines()) <= 1, err
+    return code, err

@@ -2,6 +2,8 @@
 output's scale, with a stated floor), the ladder and preset bookkeeping, and a table that says
 what it holds (issue 14)."""
 
+import io
+
 import numpy as np
 import pytest
 import xarray as xr
@@ -9,6 +11,7 @@ import xarray as xr
 from roughcontact import scene as scenes
 from roughcontact.accuracy import FLOOR, MEASURE, measure, scaled_error
 from roughcontact.cli import main
+from roughcontact.progress import Reporter
 
 from conftest import make_scene
 
@@ -48,8 +51,9 @@ def test_the_table_states_its_measure_and_reuses_runs_of_equal_settings(tmp_path
                      load={"p": {"from": "1 MPa", "to": "10 GPa", "num": 5}})
     raw["numerics"] = {"points_per_decade": 20}  # explicit: every preset runs at 20, i.e. one rung
     sc = scenes.from_dict(raw)
-    lines = []
-    ds = measure(sc, tmp_path / "acc", report=lines.append, progress=False)
+    stream = io.StringIO()
+    ds = measure(sc, tmp_path / "acc", report=Reporter(stream, bars=False))
+    lines = stream.getvalue().splitlines()
     assert list(ds["stage"].values) == ["contact"]
     assert ds["rung_error"].attrs["error_measure"] == MEASURE and ds["rung_error"].attrs["error_floor"] == FLOOR
     assert float(ds["rung_error"].sel(stage="contact").isel(rung=-1)) == 0.0  # the reference against itself
@@ -72,5 +76,5 @@ def test_a_scene_without_measured_outputs_is_told_so_and_nothing_is_written(tmp_
 
     sc = scenes.from_dict(make_scene(outputs={"variables": ["psd_combined"]}))
     with pytest.raises(UserError, match="none of this scene's stages \\(psd\\)"):
-        measure(sc, tmp_path / "acc", report=lambda line: None, progress=False)
+        measure(sc, tmp_path / "acc", report=Reporter(None))
     assert not (tmp_path / "acc").exists()

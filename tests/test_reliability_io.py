@@ -11,6 +11,7 @@ import errno
 import io
 import json
 import os
+import re
 import socket
 import subprocess
 import sys
@@ -27,17 +28,13 @@ from roughcontact.cli import main
 from roughcontact.errors import OutputError, UserError
 from roughcontact.preflight import LOCK_NAME
 
-from conftest import make_scene
+from conftest import cli_error_line, make_scene
 
 SMALL = {"points_per_decade": 10}
 TESTS = Path(__file__).resolve().parent
 
 
-def _cli(capsys, *args):
-    code = main(list(map(str, args)))
-    err = capsys.readouterr().err.strip()
-    assert "Traceback" not in err and len(err.splitlines()) <= 1, err
-    return code, err
+_cli = cli_error_line
 
 
 def _quiet():

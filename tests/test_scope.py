@@ -77,8 +77,8 @@ def test_readme_example_as_printed_sees_both_surfaces(tmp_path):
         res = _run_file(path, tmp_path / "out")
     contact = res["base"]["contact"]
     assert float(contact["qL"]) == pytest.approx(2e8)
-    G = contact["G"].sel(zeta=4.0).values  # over eta = 0, +1, -1
-    assert G[2] > G[0] > G[1] >= 0  # anti-correlated roughness is worst, correlated cancels (eq 52)
+    G = {e: float(contact["G"].sel(zeta=4.0, eta=e)) for e in (0.0, 1.0, -1.0)}
+    assert G[-1.0] > G[0.0] > G[1.0] >= 0  # anti-correlated roughness is worst, correlated cancels (eq 52)
 
 
 def test_nothing_rough_left_is_an_error_and_all_magnifications_are_fine(run_scene):

@@ -61,7 +61,7 @@ def test_every_stored_distribution_integrates_to_the_contact_area(H, decades, lo
     q1 = 2e8 * 10**decades
     solid = dict(SURFACE, H=H, q1=f"{q1!r} 1/m") if identical else dict(SURFACE, H=0.8, hrms="0.7 nm")
     raw = make_scene(substrate=dict(SURFACE, H=H, q1=f"{q1!r} 1/m"), solid=solid, interface={"eta": eta},
-                     load={"p": [f"{10**logp * E_STAR!r} Pa", f"{10**min(logp + 2, 3.0) * E_STAR!r} Pa"]},
+                     load={"p": [f"{v!r} Pa" for v in sorted({10**logp * E_STAR, 10**min(logp + 2, 3.0) * E_STAR})]},
                      contact={"zeta": sorted({1.0, min(zeta, q1 / 2e8)})},
                      outputs={"variables": ["stress_distribution"]}, numerics={"points_per_decade": 10})
     with tempfile.TemporaryDirectory() as tmp:

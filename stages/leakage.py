@@ -1,0 +1,133 @@
+"""Stage ``leakage``: the leak rate of a static seal over (p, eta) by the critical-junction theory
+and by the effective-medium (Bruggeman) theory, with the pressure at which each says the seal
+closes (the non-contact area stops percolating).
+
+Kernels: :mod:`roughcontact.physics.leakage` (on Persson's A(zeta) and the separation u_bar(zeta)
+of the roughness above each magnification, eq 57's kernels). Scene: ``[leakage]`` (liquid,
+pressure drop, seal size, percolation threshold). Figure: :mod:`roughcontact.stages.figures.interface`.
+See docs/interface.md.
+"""
+
+from __future__ import annotations
+
+import xarray as xr
+
+from roughcontact.physics.leakage import BRUGGEMAN_AREA, PERCOLATION_AREA, leak_rate, leakage_kernel, sealing_pressure
+from roughcontact.stage import Figure, Param, Section, Stage, StageInput, Var, register, register_params, register_section
+
+from .figures.interface import figure_leakage
+from .shared import MATERIAL_KEYS, e_star
+from .stiffness import SEPARATION_KEYS, separation_settings
+
+register_section(
+    Section(
+        "leakage",
+        (
+            Param("viscosity", "quantity", "Pa*s", lo=0.0, lo_open=True, doc="dynamic viscosity of the liquid (> 0)"),
+            Param("pressure_drop", "quantity", "Pa", lo=0.0, lo_open=True,
+                  doc="pressure difference across the seal (> 0), with units"),
+            Param("seal_width", "quantity", "m", lo=0.0, lo_open=True,
+                  doc="width W of the seal across the flow, e.g. an O-ring's circumference (> 0)"),
+            Param("seal_length", "quantity", "m", lo=0.0, lo_open=True,
+                  doc="length L of the seal along the flow, the nominal contact's width (> 0); Q ~ W/L"),
+            Param("percolation_area", "quantity", "", default=PERCOLATION_AREA, lo=0.0, hi=1.0, lo_open=True,
+                  hi_open=True, doc="A/A0 at which the non-contact area stops percolating (critical junction; "
+                                    "0.42: Dapp et al. 2012)"),
+        ),
+        doc="the seal and the liquid of the leakage stage",
+    )
+)
+register_params(
+    "numerics",
+    Param("leakage_bins_per_decade", "int", default=20, lo=2, hi=400, presets={"fast": 10, "accurate": 40},
+          ladder=(5, 10, 20, 40, 80), doc="logarithmic bins per decade of the gap u in P(u) (effective medium)"),
+    Param("leakage_points_per_decade", "int", default=10, lo=1, presets={"fast": 5, "accurate": 20},
+          ladder=(3, 5, 10, 20, 40), doc="magnifications 1 + delta per decade of delta at which P(u) is resolved"),
+)
+
+SEAL_KEYS = ("leakage.viscosity", "leakage.pressure_drop", "leakage.seal_width", "leakage.seal_length")
+NUMERICS = ("numerics.leakage_bins_per_decade", "numerics.leakage_points_per_decade")
+
+
+def leakage_settings(inp: StageInput, q_top: float) -> dict:
+    """The keywords of :func:`roughcontact.physics.leakage.leakage_kernel` from the scene, on the
+    band [qL, q_top]."""
+    settings = separation_settings(inp)
+    alpha, refinement = settings.pop("alpha"), settings.pop("refinement")
+    return dict(E_star=e_star(inp), alpha=alpha, refinement=refinement, numerics=settings,
+                area=float(inp["leakage.percolation_area"]), q_top=q_top,
+                bins_per_decade=inp["numerics.leakage_bins_per_decade"],
+                points_per_decade=inp["numerics.leakage_points_per_decade"])
+
+
+def seal_parameters(inp: StageInput) -> tuple[float, float, float, float]:
+    """(dp (Pa), mu (Pa s), W (m), L (m)): the trailing arguments of
+    :func:`roughcontact.physics.leakage.leak_rate`, Q = (W/L) sigma dp / (12 mu)."""
+    return tuple(float(inp[k]) for k in ("leakage.pressure_drop", "leakage.viscosity", "leakage.seal_width",
+                                         "leakage.seal_length"))
+
+
+def compute_leakage(inp: StageInput) -> xr.Dataset:
+    psd = inp.upstream["psd"]
+    q, C = psd["q"], psd["psd_combined"]
+    kw = leakage_settings(inp, float(q[-1]))
+    zeta_c, u1, s_cj, s_emt = xr.apply_ufunc(
+        leakage_kernel, q, C, inp.sweep("p", inp["load.p"]), kwargs=kw, input_core_dims=[["q"], ["q"], []],
+        output_core_dims=[[]] * 4, dask="parallelized", output_dtypes=[float] * 4,
+    )
+    ds = xr.Dataset({"critical_magnification": zeta_c, "critical_gap": u1, "flow_factor_critical_junction": s_cj,
+                     "flow_factor_effective_medium": s_emt})
+    for method, area in (("critical_junction", kw["area"]), ("effective_medium", BRUGGEMAN_AREA)):
+        ds[f"sealing_pressure_{method}"] = xr.apply_ufunc(sealing_pressure, q, C, kw["E_star"], area,
+                                                           input_core_dims=[["q"], ["q"], [], []])
+        ds[f"leak_rate_{method}"] = xr.apply_ufunc(leak_rate, ds[f"flow_factor_{method}"], *seal_parameters(inp),
+                                                   dask="parallelized", output_dtypes=[float])
+    ds["critical_magnification"].attrs = {
+        "nan_reason": "NaN where A(q_max)/A0 >= leakage.percolation_area: the non-contact area does not percolate "
+                      "at any magnification (the seal is closed; critical_gap and the leak rate are 0)"}
+    width, length = seal_parameters(inp)[2:]
+    ds.attrs.update({"leakage_percolation_area": kw["area"], "leakage_bruggeman_area": BRUGGEMAN_AREA,
+                     "leakage_aspect_ratio": width / length})
+    if "p" in ds.dims:
+        ds = ds.transpose(..., "p")
+    return ds
+
+
+def _point_bytes(params, wanted, upstream) -> int:
+    """Per (p, eta) point: the gap distribution's distribution function on (magnifications x gap
+    bins), about 15 decades of zeta - 1 by 10 decades of u, a few float64 temporaries."""
+    magnifications = 15 * int(params["numerics.leakage_points_per_decade"]) + 2
+    bins = 10 * int(params["numerics.leakage_bins_per_decade"]) + 3
+    return 8 * 4 * magnifications * bins
+
+
+FLOW = "Q = (W/L) sigma dp / (12 mu), sigma = "
+register(
+    Stage(
+        name="leakage",
+        version="1",
+        compute=compute_leakage,
+        requires=("psd",),
+        params=(*MATERIAL_KEYS, "load.p", *SEPARATION_KEYS, *SEAL_KEYS, "leakage.percolation_area", *NUMERICS),
+        outputs={
+            "leak_rate_critical_junction": Var("m^3/s", "leak rate of the seal, critical-junction theory "
+                                                        "(Persson & Yang 2008)", attrs={"formula": FLOW + "u1^3"}),
+            "leak_rate_effective_medium": Var("m^3/s", "leak rate of the seal, effective-medium theory "
+                                                       "(Lorenz & Persson 2010)", attrs={"formula": FLOW + "Bruggeman"}),
+            "flow_factor_critical_junction": Var("m^3", "effective flow factor u1^3 of the critical junction"),
+            "flow_factor_effective_medium": Var("m^3", "effective flow factor sigma of Bruggeman's 2D effective medium"),
+            "critical_magnification": Var("1", "magnification zeta_c at which the non-contact area percolates, "
+                                               "A(zeta_c)/A0 = leakage.percolation_area"),
+            "critical_gap": Var("m", "separation u1(zeta_c) of the critical constriction"),
+            "sealing_pressure_critical_junction": Var("Pa", "nominal pressure above which the critical-junction "
+                                                            "theory has no open path (A(q_max)/A0 = percolation_area)"),
+            "sealing_pressure_effective_medium": Var("Pa", "nominal pressure above which Bruggeman's medium does not "
+                                                           "conduct (A(q_max)/A0 = 1/2)"),
+        },
+        figures=(Figure("leakage", "leak rate of the seal against the contact pressure", ("leakage",), figure_leakage),),
+        doc="Leak rate of a seal over (p, eta): critical-junction and effective-medium theories.",
+        point_bytes=_point_bytes,
+        main_outputs=("leak_rate_critical_junction",),
+        tolerance=1e-4,
+    )
+)

@@ -1,0 +1,86 @@
+"""The Python API: the notebook example of docs/api.md runs as written and returns Datasets with
+the expected variables; the library writes nothing to stdout; scenes come from files, names and
+dicts; `import roughcontact` stays cheap."""
+
+from __future__ import annotations
+
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import matplotlib
+import numpy as np
+import pytest
+import xarray as xr
+
+import roughcontact as rc
+from roughcontact.errors import UserError
+
+from conftest import make_scene
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def test_the_api_page_example_runs_and_returns_datasets(tmp_path, monkeypatch, capsys):
+    matplotlib.use("Agg")
+    monkeypatch.chdir(tmp_path)
+    blocks = re.findall(r"```python\n(.*?)```", (ROOT / "docs" / "api.md").read_text(), flags=re.S)
+    assert len(blocks) >= 4
+    namespace: dict = {}
+    exec(compile("\n".join(blocks), "docs/api.md", "exec"), namespace)
+    printed = capsys.readouterr()
+    assert "default" in printed.out and printed.err == ""  # progress=False: the library said nothing
+
+    results = namespace["results"]
+    assert set(results) == {"base", "substrate_only"}
+    contact = results["base"]["contact"]
+    assert isinstance(contact, xr.Dataset)
+    assert {"contact_area_ratio", "stress_distribution", "E_star"} <= set(contact.data_vars)
+    assert list(contact["eta"].values) == [-1.0, 0.0, 1.0]
+    assert set(results["base"]) == {"psd", "contact", "separation"}
+    # eta = +1 with identical surfaces: no gap roughness, full contact (eq 52)
+    np.testing.assert_allclose(namespace["area"].sel(eta=1.0).values, 1.0)
+    separation = namespace["separation"]
+    assert separation.attrs["units"] == "m" and np.all(np.diff(separation.values, axis=separation.dims.index("p")) <= 0)
+    assert namespace["ds"].attrs["stage_name"] == "contact"
+    assert (tmp_path / "outputs" / "api-example" / "contact.nc").is_file()
+    assert (tmp_path / "api-example.png").stat().st_size > 10_000
+
+
+def test_progress_goes_to_stderr_only(tmp_path, capsys):
+    rc.run(make_scene(), tmp_path / "out")
+    printed = capsys.readouterr()
+    assert printed.out == ""
+    assert printed.err.count("computed in") == 2  # not a terminal: one line per stage, no bars
+
+
+def test_scenes_from_a_file_a_name_and_a_dict_agree(tmp_path, write_scene):
+    raw = make_scene()
+    from_file = rc.load_scene(write_scene(raw))
+    from_dict = rc.load_scene(raw)
+    assert from_file.values["material"] == from_dict.values["material"]
+    assert rc.load_scene("friction").name == "friction" and rc.load_scene().name == "default"
+    unset = make_scene(numerics=None)
+    assert rc.load_scene(unset, preset="fast").values["numerics"]["points_per_decade"] == 20
+    assert rc.load_scene(rc.load_scene(unset), preset="accurate").values["numerics"]["points_per_decade"] == 100
+    plans = rc.plan(raw, tmp_path / "out")
+    assert [(p.label, p.status) for p in plans] == [("psd", "missing"), ("contact", "missing")]
+    res = rc.run(from_file, tmp_path / "out", progress=False)
+    assert {p.status for p in rc.plan(raw, tmp_path / "out")} == {"fresh"}
+    assert res.outdir == tmp_path / "out"
+    xr.testing.assert_identical(rc.open_result(tmp_path / "out" / "contact.nc"), res["base"]["contact"])
+
+
+def test_bad_input_raises_a_user_error_naming_the_key(tmp_path):
+    with pytest.raises(UserError, match="material.nu"):
+        rc.load_scene(make_scene(material={"nu": 0.7}))
+    with pytest.raises(UserError, match="no such result file"):
+        rc.open_result(tmp_path / "nothing.nc")
+
+
+def test_importing_the_package_imports_no_heavy_module():
+    code = ("import sys, roughcontact; heavy = [m for m in ('xarray', 'dask', 'pint', 'matplotlib', 'netCDF4', 'scipy') "
+            "if m in sys.modules]; print(heavy); roughcontact.load_scene; print('xarray' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split("\n")
+    assert out[0] == "[]" and out[1] == "True"
