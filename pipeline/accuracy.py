@@ -206,10 +206,13 @@ def measure(scene: Scene, outdir: Path, report: Reporter | None = None) -> xr.Da
     store.write(ds, outdir / "accuracy.nc")
     from .accuracy_figure import figure
 
-    fig = figure(ds)
-    tmp_png = outdir / f"{store.TMP_PREFIX}accuracy.png"
-    fig.savefig(tmp_png, dpi=130)
-    tmp_png.replace(outdir / "accuracy.png")
+    fig = figure(ds)  # selects the Agg backend first
+    import matplotlib.pyplot as plt
+
+    try:
+        store.write_figure(fig, outdir / "accuracy.png")
+    finally:
+        plt.close(fig)
     return ds
 
 

@@ -13,7 +13,7 @@ import warnings
 from pathlib import Path
 
 from . import __version__, engine, scene as scenes, store
-from .errors import ComputationError, OutputError, SceneWarning, UserError
+from .errors import ComputationError, SceneWarning, UserError
 from .scene import units_of
 from .stage import stages
 from .units import display
@@ -166,14 +166,8 @@ def _plot(sc, outdir: Path, reporter, scheduler=None) -> int:
             target.unlink(missing_ok=True)
             print(f"{f.title}: nothing to draw for this scene (no figure written)")
             continue
-        tmp = folder / f"{store.TMP_PREFIX}{f.name}.png"
         try:
-            fig.savefig(tmp, dpi=130)
-            tmp.replace(target)
-        except OSError as exc:  # a full disk, say: name the figure, keep nothing of it
-            tmp.unlink(missing_ok=True)
-            raise OutputError(f"cannot write this figure ({exc.strerror or exc}); nothing of it was kept",
-                              file=str(target)) from None
+            store.write_figure(fig, target)
         finally:
             plt.close(fig)
         print(f"{f.title}: {target}")

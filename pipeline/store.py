@@ -182,6 +182,21 @@ def write(ds: xr.Dataset, path: Path, compute_with="threads", progress=None, com
         raise
 
 
+def write_figure(fig, path: Path, dpi: int = 130) -> None:
+    """Save a matplotlib figure as PNG at ``path`` whole or not at all: drawn into a temporary
+    file beside it, then renamed; a figure that cannot be written (full disk, no permission) is
+    an :class:`OutputError` naming it, and nothing of it is kept. The caller closes the figure."""
+    path = Path(path)
+    tmp = path.with_name(f"{TMP_PREFIX}{path.name}")
+    try:
+        fig.savefig(tmp, dpi=dpi)
+        tmp.replace(path)
+    except OSError as exc:
+        tmp.unlink(missing_ok=True)
+        raise OutputError(f"cannot write this figure ({exc.strerror or exc}); nothing of it was kept",
+                          file=str(path)) from None
+
+
 def new_file_mode() -> int:
     """The permissions the user's umask gives a new file (0644 under umask 022)."""
     mask = os.umask(0o022)

@@ -132,6 +132,20 @@ def test_an_output_folder_that_is_a_file_and_a_result_path_that_is_a_folder(tmp_
     assert not (out / "psd.nc").exists()
 
 
+
+def test_a_figure_that_cannot_be_written_is_named_and_nothing_of_it_is_kept(tmp_path, capsys, write_scene):
+    path = write_scene(make_scene(numerics=SMALL))
+    out = tmp_path / "out"
+    assert main(["run", str(path), "--outdir", str(out), "--quiet"]) == 0
+    assert main(["plot", str(path), "--outdir", str(out)]) == 0
+    figure = sorted((out / "figures").glob("*.png"))[0]
+    figure.unlink()
+    figure.mkdir()  # the figure's path is now a folder: the rename onto it fails
+    capsys.readouterr()
+    code, err = _cli(capsys, "plot", path, "--outdir", out)
+    assert code == 1 and "cannot write this figure" in err and str(figure) in err
+    assert not list((out / "figures").glob(".tmp-*")) and figure.is_dir()
+
 # ----------------------------------------------------------------------------------------
 # A full disk: the file that could not be written is named, nothing of it is kept
 # ----------------------------------------------------------------------------------------
