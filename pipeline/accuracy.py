@@ -1,6 +1,6 @@
 """``roughcontact accuracy``: the error and cost of each stage's numerical resolution, measured.
 
-For each stage of a scene that declares ``main_outputs``, the stage (and what it needs upstream)
+For each stage of a scene with outputs that declare a ``tolerance`` (:class:`~roughcontact.stage.Var`), the stage (and what it needs upstream)
 is run on a ladder of increasing resolutions: rung k sets every resolution setting the involved
 stages declare a ``ladder`` for to its k-th value (the last rung is the reference). The stage's
 own ladders set the number of rungs (an upstream ladder that is longer stops there). Each preset
@@ -49,7 +49,7 @@ def resolution_params(stage_list: list[Stage]) -> dict[str, object]:
     out = {}
     schema = sections()
     for st in stage_list:
-        for dotted in st.params:
+        for dotted in st.keys:
             section, _, key = dotted.partition(".")
             if not key or section not in schema:
                 continue
@@ -104,26 +104,40 @@ def _interp(da: xr.DataArray, dim: str, target: xr.DataArray) -> xr.DataArray:
     return da.interp({dim: target.values})
 
 
-def _fixed_magnifications(scene: Scene, needed: list[Stage], result: xr.Dataset) -> dict:
-    """``{"contact.zeta": [...]}`` when the scene asks for every node of the q grid (zeta = "all"):
-    the nodes of the cheapest rung's grid (``result``), so that every rung is computed and compared
-    at the same magnifications (the grids differ; interpolating the reference between its nodes
-    would measure the interpolation). Else nothing."""
-    reads = any("contact.zeta" in st.params for st in needed)
-    if not reads or not isinstance(scene.get("contact.zeta"), str) or "zeta" not in result.coords:
-        return {}
-    return {"contact.zeta": [float(z) for z in np.atleast_1d(result["zeta"].values)]}
+def _sweep_param(dotted: str):
+    """The :class:`~roughcontact.schema.Param` of a dotted key, and the name of its dimension if
+    it is a sweep (else None)."""
+    section, _, key = dotted.partition(".")
+    sec = sections().get(section)
+    params = sec.params + tuple(p for ps in sec.variants.values() for p in ps) if sec is not None else ()
+    p = next((p for p in params if p.name == key), None)
+    return (p.dim or p.name).format(section=section) if p is not None and p.kind == "sweep" else None
+
+
+def _fixed_sweeps(scene: Scene, needed: list[Stage], result: xr.Dataset) -> dict:
+    """The sweeps whose values the resolution decides, fixed: a sweep key the measured stages read
+    that the scene sets to a word (e.g. ``"all"``: every node of the q grid) and whose dimension
+    the result has, set to the cheapest rung's values of that coordinate (``result``), so that
+    every rung is computed and compared at the same points (the grids differ; interpolating the
+    reference between its nodes would measure the interpolation). Else nothing."""
+    out = {}
+    for dotted in dict.fromkeys(k for st in needed for k in st.keys):
+        dim = _sweep_param(dotted) if isinstance(scene.get(dotted), str) else None
+        if dim is not None and dim in result.coords:
+            out[dotted] = [float(v) for v in np.atleast_1d(result[dim].values)]
+    return out
 
 
 def _settings_of(sc: Scene, needed: list[Stage]) -> dict:
     """Every parameter the measured stages read, as resolved for ``sc`` (what decides a run)."""
-    return {name: repr(sc.get(name)) for st in needed for name in st.params}
+    return {name: repr(sc.get(name)) for st in needed for name in st.keys}
 
 
 def measure_stage(scene: Scene, st: Stage, workdir: Path, report: Reporter = SILENT) -> dict:
-    needed = engine.needed_stages(scene, st.main_outputs)
+    outputs = tuple(st.measured)
+    needed = engine.needed_stages(scene, outputs)
     params = resolution_params(needed)
-    own = [p for k, p in params.items() if k in st.params] or list(params.values())
+    own = [p for k, p in params.items() if k in st.keys] or list(params.values())
     rungs = max((len(p.ladder) for p in own), default=0)  # the stage's own ladder sets the rungs
     if rungs < 2:
         return {}
@@ -135,14 +149,14 @@ def measure_stage(scene: Scene, st: Stage, workdir: Path, report: Reporter = SIL
         out, times = workdir / st.name / tag, []
         while len(times) < (3 if not times or times[0] < REPEAT_BELOW else 1):
             t0 = time.perf_counter()
-            res = engine.run(sc, out, targets=st.main_outputs, force=("all",), report=engine.Reporter(None))
+            res = engine.run(sc, out, targets=outputs, force=("all",), report=engine.Reporter(None))
             times.append(time.perf_counter() - t0)
         step()
         return res["base"][st.name], float(np.median(times))
 
     try:
         warm, _ = timed(with_settings(scene, settings[0]), "warm-up")  # imports and caches, not measured (the cheapest rung)
-        fixed = _fixed_magnifications(scene, needed, warm)
+        fixed = _fixed_sweeps(scene, needed, warm)
         rung_scenes = [with_settings(scene, {**s, **fixed}) for s in settings]
         preset_scenes = {name: with_settings(scene, fixed, name) for name in PRESETS}
         keys = [_settings_of(sc, needed) for sc in rung_scenes]
@@ -153,21 +167,21 @@ def measure_stage(scene: Scene, st: Stage, workdir: Path, report: Reporter = SIL
                           total=rungs + sum(i is None for i in same.values()))
         runs = [timed(sc, f"rung {i}") for i, sc in enumerate(rung_scenes)]
         reference = runs[-1][0]
-        errors = [output_errors(r, reference, st.main_outputs) for r, _ in runs]
+        errors = [output_errors(r, reference, outputs) for r, _ in runs]
         presets = {}
         for name, sc in preset_scenes.items():
             i = same[name]
             res, seconds = runs[i] if i is not None else timed(sc, name)
-            presets[name] = (output_errors(res, reference, st.main_outputs), seconds, i)
+            presets[name] = (output_errors(res, reference, outputs), seconds, i)
     finally:
         step.close()
         report.finish()
     return {"settings": settings, "errors": errors, "times": [t for _, t in runs], "presets": presets,
-            "tolerance": st.tolerance, "outputs": [n for n in st.main_outputs if n in errors[0]]}
+            "tolerance": min(st.measured.values()), "outputs": [n for n in outputs if n in errors[0]]}
 
 
 def measure(scene: Scene, outdir: Path, report: Reporter | None = None) -> xr.Dataset:
-    """Measure every stage of the scene that declares main outputs; write NetCDF + PNG. Progress
+    """Measure every stage of the scene with outputs that declare a tolerance; write NetCDF + PNG. Progress
     (bars on a terminal) and the table go to ``report`` (default: a
     :class:`~roughcontact.progress.Reporter` on stderr)."""
     report = report if report is not None else Reporter()
@@ -175,7 +189,7 @@ def measure(scene: Scene, outdir: Path, report: Reporter | None = None) -> xr.Da
     measured = {}
     with tempfile.TemporaryDirectory() as tmp:
         for st in all_stages:
-            if not st.main_outputs:
+            if not st.measured:
                 continue
             report(f"accuracy: {st.name} ...")
             m = measure_stage(scene, st, Path(tmp), report)

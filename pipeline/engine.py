@@ -12,16 +12,17 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Iterable
 
+import numpy as np
 import xarray as xr
 
-from . import integrity, preflight, reuse, store
+from . import integrity, preflight, reuse, sizing, store
 from .errors import UserError
 from .progress import Reporter
 from .results import StageResults
 from .schema import MISSING, did_you_mean
 from .scene import Scene, units_of
 from .units import display
-from .stage import Stage, StageInput, coords, producer_of, stages
+from .stage import Shape, Stage, StageInput, coords, producer_of, stages
 
 
 @dataclass
@@ -60,8 +61,7 @@ def needed_stages(scene: Scene, targets: Iterable[str]) -> list[Stage]:
             raise RuntimeError(f"stage cycle: {' -> '.join(trail + (st.name,))}")
         if st.name in seen:
             return
-        ups = st.needed(scene.values) if st.needed else st.requires
-        for up in ups:
+        for up in st.upstream_for(scene.values):
             visit(registry[up], trail + (st.name,))
         seen.add(st.name)
         order.append(st)
@@ -118,7 +118,7 @@ def _find_identical(p: StagePlan, earlier: dict[str, Path], outdir: Path) -> Non
 
 
 def _plan_stage(scene, variant, st, outdir, keys, targets, force, verify=None) -> StagePlan:
-    params = {name: st.section_view(name, scene.get(name)) for name in st.params}
+    params = {name: st.section_view(name, scene.get(name)) for name in st.keys}
     absent = [name for name, value in params.items() if value is MISSING]
     if absent:
         raise UserError(f"missing required key (stage {st.name} needs it)", key=absent[0])
@@ -133,7 +133,7 @@ def _plan_stage(scene, variant, st, outdir, keys, targets, force, verify=None) -
             continue
         file_paths[f.param] = Path(value)
         inputs.append(reuse.input_entry(f.param, value, scene.path, f.param))
-    upstream = {up: keys[up] for up in (st.needed(scene.values) if st.needed else st.requires)}
+    upstream = {up: keys[up] for up in st.upstream_for(scene.values)}
     wanted = frozenset(t for t in targets if t in st.outputs and st.outputs[t].optional)
     record = {
         "stage": st.name,
@@ -283,8 +283,8 @@ def _run(scene, outdir, targets, force, report, compute_with, verify=None):
         store.clean_temporaries(folder)
     results = {v: StageResults(_open) for v in scenes}  # each result opened when first read
     # read every input file, run every validation and check every size before anything computes or is written
-    files, previews = preflight.validate(plans, scenes, outdir)
-    for note in notes(plans, previews):  # on a terminal; `plan` prints them always
+    files, shapes = preflight.check(plans, scenes, outdir)
+    for note in notes(plans, shapes):  # on a terminal; `plan` prints them always
         report.live(f"note: {note}")
     n = len(plans)
     for i, p in enumerate(plans, start=1):
@@ -302,7 +302,8 @@ def _run(scene, outdir, targets, force, report, compute_with, verify=None):
         report.live(f"{tag}: computing ({why})")
         t0 = time.perf_counter()
         upstream = {up: results[p.variant][up] for up in p.record["upstream"]}
-        chunks = stage_chunks(scenes[p.variant], p.stage, p.params, p.wanted, {**upstream, **_own(previews, p)})
+        shape = shapes[(p.variant, p.stage.name)]
+        chunks = sizing.stage_chunks(scenes[p.variant], p.stage, p.wanted, shape)
         inp = StageInput(
             params=p.params,
             upstream=chunk_sweeps(upstream, chunks),  # a sweep made upstream (eta, draw) splits this stage's work too
@@ -310,10 +311,12 @@ def _run(scene, outdir, targets, force, report, compute_with, verify=None):
             wanted=p.wanted,
             chunks=chunks,
             stage=p.stage.name,
+            shape=shape,
             reporter=report,
         )
         with xr.set_options(keep_attrs=False):  # a variable's units come from its declaration, never by inheritance
             computed = p.stage.compute(inp)
+        conforms(computed, shape, p.label)
         ds = _finish(computed, p)
         reuse.retire(p.path, outdir)  # the result it replaces stays reusable under its key
         store.write(ds, p.path, compute_with=compute_with, progress=report,
@@ -327,34 +330,36 @@ def _run(scene, outdir, targets, force, report, compute_with, verify=None):
 
 def checked_notes(scene: Scene, plans: list[StagePlan], outdir: Path) -> list[str]:
     """Run every check a run would run first (raising what it would refuse) and return the notes."""
-    return notes(plans, preflight.validate(plans, {"base": scene, **scene.variants}, outdir)[1])
+    return notes(plans, preflight.check(plans, {"base": scene, **scene.variants}, outdir)[1])
 
 
-def notes(plans: list[StagePlan], previews) -> list[str]:
-    """The lines the stages' validate hooks left for the user (their previews' ``note``), e.g.
-    the wavenumber zeta is measured against; ``plan`` and ``run`` print them."""
+def notes(plans: list[StagePlan], shapes) -> list[str]:
+    """The lines the stages' describe left for the user (their shapes' ``note``), e.g. the
+    wavenumber zeta is measured against; ``plan`` and ``run`` print them."""
     out = []
     for p in plans:
-        preview = previews.get((p.variant, p.stage.name))
-        note = preview.attrs.get("note") if preview is not None else None
+        shape = shapes.get((p.variant, p.stage.name))
+        note = shape.attrs.get("note") if shape is not None else None
         if note:
             out.append(f"{p.label}: {note}")
     return out
 
 
-def stage_chunks(scene: Scene, st: Stage, params, wanted=frozenset(), upstream=None) -> dict[str, int]:
-    """Chunk sizes for the stage's sweep dimensions: the scene's explicit ones, the others chosen
-    so that a chunk's working memory (the stage's bytes per sweep point) stays near chunk_mb."""
-    from .compute import auto_chunks
-
-    per_point = st.point_bytes(params, wanted, upstream or {}) if st.point_bytes else 512
-    budget = scene.chunk_mb * 2**20 / max(per_point, 8)
-    sizes = scene.sweep_sizes()
-    whole = [dim for dim in st.unchunked if dim in sizes]  # one chunk along these, whatever the scene says
-    for dim in whole:
-        budget /= sizes[dim]
-    return auto_chunks({d: n for d, n in sizes.items() if d not in whole}, budget,
-                       {d: n for d, n in scene.chunks.items() if d not in whole})
+def conforms(ds: xr.Dataset, shape: Shape, label: str) -> None:
+    """Refuse, as a bug in the stage, a computed result whose dimensions or small coordinates
+    differ from what its ``describe`` said before anything computed (the preflight's checks and
+    size estimates relied on it)."""
+    for dim, size in shape.sizes.items():
+        if dim in ds.sizes and ds.sizes[dim] != size and dim not in shape.approximate:
+            raise RuntimeError(f"stage {label} computed {dim} of size {ds.sizes[dim]}, but its describe said {size} "
+                               "(a bug in the stage)")
+    for name, values in shape.coords.items():
+        if name not in shape.approximate and name in ds.coords and ds[name].ndim == 1 and ds.sizes.get(name) == len(values):
+            computed = ds[name].values
+            if computed.dtype.kind in "fiu" and not np.allclose(computed, values, rtol=1e-12, atol=0.0, equal_nan=True):
+                worst = float(np.nanmax(np.abs(computed - values) / np.abs(values)))
+                raise RuntimeError(f"stage {label} computed coordinate {name} unlike its describe (largest relative "
+                                   f"difference {worst:.3g}; a bug in the stage)")
 
 
 def _open(path: Path) -> xr.Dataset:
@@ -364,9 +369,3 @@ def _open(path: Path) -> xr.Dataset:
     from .ncio import open_lazily
 
     return open_lazily(path)
-
-
-def _own(previews, p: StagePlan) -> dict:
-    """The stage's own preview (from its validate hook), for its point_bytes hook."""
-    own = previews.get((p.variant, p.stage.name))
-    return {p.stage.name: own} if own is not None and p.status != "fresh" else {}

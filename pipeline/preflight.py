@@ -6,10 +6,11 @@
   for the whole run: a second run on the same folder waits for the first (saying so) or, with a
   timeout, refuses with a clear message. Only a run that holds the lock removes temporaries, so
   a temporary is removed by its owner or, once no run holds the lock, as provably stale.
-* :func:`validate` reads every input file and runs every stage's ``validate`` hook, upstream
-  first, handing each the :class:`~roughcontact.stage.Preview` of its upstream results; then it
-  estimates the size of every result and working array (:mod:`roughcontact.sizing`) and refuses
-  what the machine cannot hold. All of this happens before anything is computed or written.
+* :func:`check` reads every input file and runs every stage's ``check`` and ``describe``,
+  upstream first, handing each the :class:`~roughcontact.stage.Shape` of its upstream results;
+  then it estimates the size of every result and working array (:mod:`roughcontact.sizing`) and
+  refuses what the machine cannot hold. All of this happens before anything is computed or
+  written.
 """
 
 from __future__ import annotations
@@ -23,7 +24,7 @@ from typing import Iterator
 from . import sizing
 from .errors import UserError
 from .readers import READERS
-from .stage import Preview, StageInput
+from .stage import Shape, StageInput
 
 #: the lock file every run holds in its output folder
 LOCK_NAME = ".roughcontact.lock"
@@ -101,14 +102,14 @@ def read_input(st, param: str, path, params):
     return [reader(p, **options) for p in path] if isinstance(path, tuple) else reader(path, **options)
 
 
-def stored_preview(path: Path) -> Preview:
-    """The preview of a stored (fresh) result: its sizes and coordinate ranges, no data loaded."""
+def stored_shape(path: Path) -> Shape:
+    """The shape of a stored (fresh) result: its sizes and coordinate ranges, no data loaded."""
     import xarray as xr
 
     from . import ncio
 
     with ncio.locked(), xr.open_dataset(path) as ds:
-        return Preview.of(ds)
+        return Shape.of(ds)
 
 
 @contextlib.contextmanager
@@ -127,13 +128,31 @@ def _stored(p) -> bool:
     return p.status == "fresh" or getattr(p, "source", None) is not None
 
 
-def validate(plans, scenes: dict, outdir: Path) -> tuple[dict[int, dict], dict[tuple[str, str], Preview]]:
-    """Read the input files and run the checks of every stage about to compute: first each stage's
-    ``check`` (its own keys and files: the cause), then each ``validate`` with the previews of its
-    upstream results (what follows from them), upstream first; then check the sizes. Returns the
-    loaded files per plan index and the previews per (variant, stage). A result put in place from an
-    identical one (``p.source``, roughcontact.reuse) counts as stored; with nothing to compute, nothing
-    is read at all (a rerun stays fast)."""
+def _checked(p, files: dict) -> None:
+    """Run the stage's ``check`` of one plan (its keys and files; no upstream shapes)."""
+    if p.stage.check is not None:
+        p.stage.check(StageInput(params=p.params, files=files, wanted=p.wanted, stage=p.stage.name))
+
+
+def described(p, upstream: dict[str, Shape], files: dict) -> Shape:
+    """Run the stage's ``describe`` for one plan (``upstream``: the shapes of its upstream
+    results): the shape of the dimensions it adds (empty if it adds none)."""
+    inp = StageInput(params=p.params, upstream=upstream, files=files, wanted=p.wanted, stage=p.stage.name)
+    shape = p.stage.describe(inp) if p.stage.describe is not None else None
+    return shape if shape is not None else Shape()
+
+
+def check(plans, scenes: dict, outdir: Path) -> tuple[dict[int, dict], dict[tuple[str, str], Shape]]:
+    """Everything that can be known before computing, before anything is computed or written:
+    read the input files of every stage about to compute (a bad file is named first) and run
+    every stage's ``check`` (its keys and files: a cause, such as two maps on different grids, is
+    reported before its consequences downstream); then each stage's ``describe``, upstream first,
+    with the shapes of its upstream results (of the stored file, or what the upstream
+    ``describe`` gave), which refuses what does not fit them; then the sizes. Returns
+    the loaded files per plan index and the shape of every result per (variant, stage), with
+    the sweep dimensions it spans. A result put in place from an identical one (``p.source``,
+    roughcontact.reuse) counts as stored; with nothing to compute, nothing is read at all (a
+    rerun stays fast)."""
     files: dict[int, dict] = {}
     if all(_stored(p) for p in plans):
         return files, {}
@@ -141,10 +160,8 @@ def validate(plans, scenes: dict, outdir: Path) -> tuple[dict[int, dict], dict[t
         if not _stored(p):
             with _in_variant(p.variant):
                 files[i] = {param: read_input(p.stage, param, path, p.params) for param, path in p.file_paths.items()}
-                if p.stage.check is not None:
-                    p.stage.check(StageInput(params=p.params, files=files[i], wanted=p.wanted, stage=p.stage.name))
-    previews: dict[tuple[str, str], Preview] = {}
-    spanned: dict[tuple[str, str], dict[str, int]] = {}
+                _checked(p, files[i])
+    shapes: dict[tuple[str, str], Shape] = {}
     stored: dict[tuple[str, str], int] = {}  # bytes of each result, estimated or on disk
     estimates = []
     planned: dict[Path, tuple[str, str]] = {}  # result path -> its (variant, stage)
@@ -152,28 +169,25 @@ def validate(plans, scenes: dict, outdir: Path) -> tuple[dict[int, dict], dict[t
     for i, p in enumerate(plans):
         here = (p.variant, p.stage.name)
         ups = tuple(p.record["upstream"])
-        upstream = {up: previews[(p.variant, up)] for up in ups if (p.variant, up) in previews}
-        dims = sizing.own_sweep_dims(scenes[p.variant], p.stage)
-        for up in ups:
-            dims = {**spanned.get((p.variant, up), {}), **dims}
-        spanned[here] = dims
-        lazy = frozenset(d for up in ups if stored.get((p.variant, up), 0) > LOAD_LIMIT_BYTES
-                         for d in spanned.get((p.variant, up), {}))
+        upstream = {up: shapes[(p.variant, up)] for up in ups if (p.variant, up) in shapes}
+        planned_at = planned.get(p.path if p.status == "fresh" else p.source) if _stored(p) else None
         if _stored(p):
             where = p.path if p.status == "fresh" else p.source
-            if where in planned:  # identical to a result computed earlier in this run: its preview
-                previews[here], stored[here] = previews[planned[where]], stored[planned[where]]
+            if planned_at is not None:  # identical to a result computed earlier in this run: its shape
+                shapes[here], stored[here] = shapes[planned_at], stored[planned_at]
             else:
-                previews[here], stored[here] = stored_preview(where), where.stat().st_size
+                shapes[here], stored[here] = stored_shape(where), where.stat().st_size
             planned[p.path] = here
             continue
+        spanned = sizing.spanned_dims(scenes[p.variant], p.stage, [shapes.get((p.variant, up)) for up in ups])
+        lazy = frozenset(d for up in ups if stored.get((p.variant, up), 0) > LOAD_LIMIT_BYTES
+                         for d in shapes[(p.variant, up)].sizes)
         with _in_variant(p.variant):
-            own = p.stage.validate(StageInput(params=p.params, upstream=upstream, files=files[i], wanted=p.wanted,
-                                              stage=p.stage.name)) if p.stage.validate is not None else None
-        estimates.append(sizing.estimate(p, scenes[p.variant], dims, own, upstream, in_flight, lazy))
+            own = described(p, upstream, files[i])
+        shape = dataclasses.replace(own, sizes={**spanned, **own.sizes})  # with the sweep dims it spans
+        estimates.append(sizing.estimate(p, scenes[p.variant], spanned, own, in_flight, lazy))
         stored[here] = estimates[-1].result
-        own = own if own is not None else Preview()
-        previews[here] = dataclasses.replace(own, sizes={**dims, **own.sizes})  # with the sweep dims it spans
+        shapes[here] = shape
         planned[p.path] = here
     sizing.check(estimates, outdir)
-    return files, previews
+    return files, shapes

@@ -4,14 +4,16 @@ the working arrays in memory?
 For every stage about to compute, the estimate multiplies the sizes of the result's dimensions:
 the scene's sweep dimensions the stage spans (from the keys it and its upstream stages read,
 e.g. ``load.p``, ``interface.eta``, ``substrate.hrms``) and the dimensions it adds itself (from
-the :class:`~roughcontact.stage.Preview` its ``validate`` hook returns, e.g. the q grid of
-``numerics.points_per_decade`` or the stress grid of ``numerics.sigma_points``).
+the :class:`~roughcontact.stage.Shape` its ``describe`` returns, e.g. the q grid of
+``numerics.points_per_decade`` or the stress grid of ``numerics.sigma_points``). One generic
+place, from the shape's data:
 
-* result bytes: the stage's ``result_bytes`` hook, or 8 bytes per output variable over every
-  dimension (an upper bound; stored uncompressed);
-* working bytes: the stage's ``point_bytes`` (its working memory per point of the sweep)
-  times the points of one block of the computation (the chunk sizes along the dimensions the
-  stage chunks, the whole length along the others) times the blocks in flight at once.
+* result bytes: 8 bytes per value of every output variable over the dimensions it spans (all,
+  but those the shape's ``lacks`` names; stored uncompressed: an upper bound);
+* working bytes: :func:`point_bytes` (8 bytes times the shape's ``work`` factors: the working
+  memory per point of the sweep) times the points of one block of the computation (the chunk
+  sizes along the dimensions the stage chunks, the whole length along the others and along the
+  ones the shape says the computation ``coupled``) times the blocks in flight at once.
 
 A scene whose results exceed the free space of the output disk, or one block of whose
 computation exceeds the memory available, is refused with a :class:`~roughcontact.errors.UserError`
@@ -136,7 +138,7 @@ def own_sweep_dims(scene, st) -> dict[str, int]:
 
     out: dict[str, int] = {}
     schema = sections()
-    for dotted in st.params:
+    for dotted in st.keys:
         section, _, key = dotted.partition(".")
         sec, values = schema.get(section), scene.values.get(section)
         if sec is None or not isinstance(values, dict):
@@ -148,37 +150,76 @@ def own_sweep_dims(scene, st) -> dict[str, int]:
     return out
 
 
-def estimate(plan, scene, spanned: dict[str, int], own, upstream: dict, in_flight: int,
-             lazy: frozenset = frozenset()) -> Estimate:
-    """The estimate for one stage plan: ``spanned`` are its sweep dimensions (its own and its
-    upstream stages'), ``own`` the Preview its validate returned (or None), ``upstream`` the
-    previews of its upstream results, ``lazy`` the dimensions of upstream results too large to be
-    loaded (they arrive in chunks)."""
-    from .engine import stage_chunks
+def spanned_dims(scene, st, upstream) -> dict[str, int]:
+    """The scene's sweep dimensions a stage's result spans: those of the keys it reads and those
+    its upstream results span (``upstream``: their shapes, None where unknown)."""
+    sweeps = scene.sweep_sizes()
+    out: dict[str, int] = {}
+    for shape in upstream:
+        out.update({d: n for d, n in (shape.sizes.items() if shape is not None else ()) if d in sweeps})
+    return {**out, **own_sweep_dims(scene, st)}
 
+
+def point_bytes(shape, outputs: int, sweeps) -> int:
+    """Working memory of one point of the sweep (bytes): 8 bytes times the product of the
+    shape's ``work`` factors, or, where the stage declares none, four temporaries of every output
+    value over the dimensions the stage adds (those of ``shape`` that are not among the scene's
+    ``sweeps``)."""
+    if shape.work:
+        return int(VALUE_BYTES * math.prod(shape.work.values()))
+    return 4 * VALUE_BYTES * max(outputs, 1) * math.prod(int(n) for d, n in shape.sizes.items() if d not in sweeps)
+
+
+def outputs_asked(st, wanted) -> list[str]:
+    """The output variables the stage writes for a scene (optional ones only when asked for)."""
+    return [name for name, var in st.outputs.items() if not var.optional or name in wanted]
+
+
+def stage_chunks(scene, st, wanted, shape) -> dict[str, int]:
+    """Chunk sizes for the stage's sweep dimensions: the scene's explicit ones, the others chosen
+    so that a chunk's working memory (:func:`point_bytes` of the stage's shape) stays near
+    chunk_mb; the dimensions the computation couples are never chunked."""
+    from .compute import auto_chunks
+
+    sizes = scene.sweep_sizes()
+    per_point = point_bytes(shape, len(outputs_asked(st, wanted)), sizes)
+    budget = scene.chunk_mb * 2**20 / max(per_point, 8)
+    whole = [dim for dim in shape.coupled if dim in sizes]  # one chunk along these, whatever the scene says
+    for dim in whole:
+        budget /= sizes[dim]
+    return auto_chunks({d: n for d, n in sizes.items() if d not in whole}, budget,
+                       {d: n for d, n in scene.chunks.items() if d not in whole})
+
+
+def result_bytes(st, wanted, sizes: dict[str, int], lacks) -> int:
+    """Bytes of the stored result: every output asked for, and every other output or coordinate of
+    the stage that ``lacks`` names (written with them; a coordinate over more than its own
+    dimension, such as a stress grid per point), over the
+    dimensions it spans (all of ``sizes`` but those ``lacks`` names), plus the 1-D coordinates and
+    the scalars."""
+    asked = outputs_asked(st, wanted)
+    names = asked + [name for name in {**st.outputs, **st.coords} if name in lacks and name not in asked]
+    values = sum(math.prod(n for d, n in sizes.items() if d not in lacks.get(name, ())) for name in names)
+    return VALUE_BYTES * (values + sum(sizes.values()) + len(names))
+
+
+def estimate(plan, scene, spanned: dict[str, int], own, in_flight: int, lazy: frozenset = frozenset()) -> Estimate:
+    """The estimate for one stage plan: ``spanned`` are its sweep dimensions (its own and its
+    upstream stages'), ``own`` the shape its describe returned (the dimensions it adds), ``lazy``
+    the dimensions of upstream results too large to be loaded (they arrive in chunks)."""
     st = plan.stage
     keys = sweep_keys()
-    own_sizes = {d: n for d, n in (own.sizes.items() if own is not None else ()) if d not in spanned}
-    n_vars = sum(1 for name, var in st.outputs.items() if not var.optional or name in plan.wanted)
+    own_sizes = {d: n for d, n in own.sizes.items() if d not in spanned}
     sizes = {**spanned, **own_sizes}
-    if st.result_bytes is not None:
-        result = int(st.result_bytes(plan.params, plan.wanted, sizes))
-    else:
-        result = VALUE_BYTES * max(n_vars, 1) * math.prod(sizes.values())
-    result += VALUE_BYTES * (sum(sizes.values()) + n_vars)  # the coordinates, and scalars
-    hooks_upstream = {**upstream, **({st.name: own} if own is not None else {})}
-    if st.point_bytes is not None:
-        per_point = int(st.point_bytes(plan.params, plan.wanted, hooks_upstream))
-    else:
-        per_point = 4 * VALUE_BYTES * max(n_vars, 1) * math.prod(own_sizes.values())
-    chunked = (set(own_sweep_dims(scene, st)) | set(lazy)) - set(st.unchunked) - set(own_sizes)
-    chunks = stage_chunks(scene, st, plan.params, plan.wanted, hooks_upstream)
+    result = result_bytes(st, plan.wanted, sizes, own.lacks)
+    per_point = point_bytes(own, len(outputs_asked(st, plan.wanted)), spanned)
+    chunked = (set(own_sweep_dims(scene, st)) | set(lazy)) - set(own.coupled) - set(own_sizes)
+    chunks = stage_chunks(scene, st, plan.wanted, own)
     block = {d: (min(chunks.get(d, n), n) if d in chunked else n) for d, n in spanned.items()}
     blocks = math.prod(math.ceil(n / block[d]) for d, n in spanned.items())
     parallel = min(in_flight, blocks)
     working = per_point * math.prod(block.values()) * parallel
-    own_keys = own.keys if own is not None else {}
-    dims = {d: (n, own_keys.get(d) or keys.get(d, ""), block.get(d, n)) for d, n in sizes.items()}
+    dims = {d: (n, own.keys.get(d) or keys.get(d, ""), block.get(d, n)) for d, n in sizes.items()}
     return Estimate(plan.label, plan.path, result, working, dims, parallel)
 
 

@@ -7,7 +7,7 @@ hashing, caching, I/O, chunking and scheduling; a stage does none of these.
 
 This module is the whole API a stage module uses (with :mod:`roughcontact.physics` for the
 numbers): :class:`Stage`, :class:`Var`, :class:`FileInput`, :class:`Figure`,
-:class:`StageInput`, :class:`Preview`, :class:`Param`, :class:`Section`, :func:`register`,
+:class:`StageInput`, :class:`Shape`, :class:`ByKind`, :class:`Upstream`, :class:`Param`, :class:`Section`, :func:`register`,
 :func:`register_section`, :func:`register_params`, :func:`register_coords`, the errors (and
 :class:`SceneWarning`) and :func:`readable` (a quantity in SI units as a short string, for
 messages and figures).
@@ -34,9 +34,9 @@ from .schema import MISSING, REQUIRED, Param, Section
 from .units import readable
 
 __all__ = [
-    "ComputationError", "FileInput", "Figure", "MISSING", "Param", "Preview", "REQUIRED", "SceneWarning", "Section",
-    "SectionKeys", "Stage", "StageInput", "UserError", "Var", "coords", "readable", "register", "register_coords",
-    "register_params", "register_section",
+    "ByKind", "ComputationError", "FileInput", "Figure", "MISSING", "Param", "REQUIRED", "SceneWarning", "Section",
+    "SectionKeys", "Shape", "Stage", "StageInput", "UserError", "Var", "coords", "readable", "register", "register_coords",
+    "register_params", "register_section", "Upstream",
 ]
 
 
@@ -46,7 +46,9 @@ class Var:
 
     ``optional`` variables are produced only when the scene asks for them by name;
     ``standard_name`` is the CF standard name where CF has one; ``attrs`` are further fixed
-    attributes (e.g. a ``comment``) stamped with the units.
+    attributes (e.g. a ``comment``) stamped with the units. A ``tolerance`` makes the variable
+    one that ``roughcontact accuracy`` measures: the error (relative to the variable's scale,
+    docs/accuracy.md) the default preset must reach.
     """
 
     units: str
@@ -54,9 +56,10 @@ class Var:
     optional: bool = False
     standard_name: str | None = None
     attrs: Mapping[str, str] = field(default_factory=dict)
+    tolerance: float | None = field(default=None, compare=False)
 
     def stamp(self) -> dict[str, str]:
-        """The attributes the engine writes on the variable."""
+        """The attributes the engine writes on the variable (the tolerance is the accuracy's)."""
         out = {"units": self.units, "long_name": self.long_name, **self.attrs}
         if self.standard_name:
             out["standard_name"] = self.standard_name
@@ -99,68 +102,100 @@ class Figure:
 
 
 @dataclass(frozen=True)
+class ByKind:
+    """Of a scene section whose tables have a ``kind`` (``[substrate]``, ``[solid]``), the keys a
+    stage reads for each kind: ``ByKind("substrate", {"topography": ("files", ...), "*": ()})``
+    ("*": every kind not listed; a kind in neither: every key). The stage is handed, and its
+    content key covers, only these keys and ``kind``: the topography stage reads a measured
+    surface's map keys, not its ``extend``, which only the psd stage reads."""
+
+    section: str
+    keys: Mapping[str, tuple[str, ...]]
+
+
+@dataclass(frozen=True)
+class Upstream:
+    """An upstream stage a stage needs only when the scene says so, as data: when the scene value
+    of any key in ``when`` is (or, for a list such as ``outputs.variables``, contains) one of the
+    listed values. ``Upstream("topography", when={"substrate.kind": ("topography", "container"),
+    "solid.kind": ("topography", "container")})``: only for measured surfaces."""
+
+    stage: str
+    when: Mapping[str, tuple] = field(default_factory=dict)
+
+    def applies(self, values: Mapping[str, Any]) -> bool:
+        """Whether the scene (its section values) needs this upstream stage."""
+        for dotted, wanted in self.when.items():
+            value: Any = values
+            for part in dotted.split("."):
+                value = value.get(part) if isinstance(value, Mapping) else None
+            found = value if isinstance(value, (list, tuple)) else (value,)
+            if any(isinstance(v, str) and v in wanted for v in found):
+                return True
+        return False
+
+
+@dataclass(frozen=True)
 class Stage:
-    """Declaration of one stage of the pipeline."""
+    """Declaration of one stage of the pipeline: what it reads, what it needs, what it writes, and
+    at most three functions.
+
+    ``compute(inp) -> Dataset`` computes the result (bare arrays: the engine stamps every
+    variable with its :class:`Var`). ``describe(inp) -> Shape`` says, before anything computes,
+    the dimensions the stage adds, their sizes and (small) coordinate values, from the scene and
+    the upstream results' shapes (``inp.upstream[name]`` is a :class:`Shape` there); the preflight
+    sizes results and memory with it, downstream stages check against it, ``compute`` reads it as
+    ``inp.shape`` and the engine refuses a computed result that differs from it, so the two cannot
+    drift; it raises :class:`UserError` where the scene does not fit the upstream shapes (a
+    magnification beyond the q grid). ``check(inp)`` raises :class:`UserError` for rules between
+    the stage's keys and files that the schema's bounds and types cannot express (``inp.upstream``
+    is empty there); the engine runs every stage's check first, then the describes, upstream
+    first, all before anything is computed or written.
+    """
 
     name: str
     version: str
     compute: Callable[["StageInput"], xr.Dataset]
     outputs: Mapping[str, Var]
     coords: Mapping[str, Var] = field(default_factory=dict)
-    requires: tuple[str, ...] = ()
-    params: tuple[str, ...] = ()
+    #: the scene keys it reads: dotted keys (``"load.p"``), whole sections (``"substrate"``), or
+    #: :class:`ByKind` selections of a section with kinds
+    reads: tuple[str | ByKind, ...] = ()
+    #: the upstream stages it needs: names, or :class:`Upstream` for one needed only by some scenes
+    needs: tuple[str | Upstream, ...] = ()
     files: tuple[FileInput, ...] = ()
     figures: tuple[Figure, ...] = ()
-    doc: str = ""
-    #: optional ``needed(scene_values) -> tuple[str, ...]``: upstream stages needed for this
-    #: particular scene, when it is a subset of ``requires`` (e.g. a stage that only needs a
-    #: measured input when the scene uses one).
-    needed: Callable[[Mapping[str, Any]], tuple[str, ...]] | None = None
-    #: optional ``point_bytes(params, wanted, upstream) -> int``: working memory, per point of
-    #: the scene's sweep dimensions, of the stage's largest intermediate (e.g. 8 * q nodes *
-    #: angle nodes, times the size of any dimension the stage adds itself), given its
-    #: parameters, the optional outputs asked for and the upstream results (lazy or small);
-    #: the engine sizes chunks with it (default 512)
-    point_bytes: Callable[[Mapping[str, Any], frozenset, Mapping[str, xr.Dataset]], int] | None = None
-    #: optional ``check(StageInput) -> None``: checks of the stage's own scene keys and files alone
-    #: (``inp.upstream`` is empty); the engine runs every stage's check before any stage's validate, so
-    #: that a cause (two maps on different grids) is reported before its consequences downstream
+    describe: Callable[["StageInput"], "Shape"] | None = None
     check: Callable[["StageInput"], None] | None = None
-    #: optional ``validate(StageInput) -> Preview | None``: every check that can fail on the user's
-    #: input (scene keys, a file's contents, a missing optional package), without computing; the engine
-    #: runs it for every stage about to compute, upstream first, before any of them computes, so a bad
-    #: input writes nothing at all. ``inp.upstream[name]`` is a :class:`Preview` of each upstream
-    #: result (of the stored file when it is fresh, else what the upstream stage's validate returned):
-    #: its dimensions' sizes and coordinate ranges, never data. Return a :class:`Preview` of this
-    #: stage's own result (the dimensions it adds, e.g. the q grid) for the checks and size estimates
-    #: downstream (``plan`` and ``run`` print its ``attrs["note"]``, e.g. the reference wavenumber of
-    #: zeta). It may warn with :class:`SceneWarning` (a request that is valid but probably not meant).
-    validate: Callable[["StageInput"], "Preview | None"] | None = None
-    #: optional ``result_bytes(params, wanted, sizes) -> int``: bytes of the stored result given the
-    #: sizes of all its dimensions (sweep dims and the ones the stage adds); default: every output
-    #: variable over every dimension (an upper bound)
-    result_bytes: Callable[[Mapping[str, Any], frozenset, Mapping[str, int]], int] | None = None
-    #: the outputs whose error ``roughcontact accuracy`` measures (default: none: not measured)
-    main_outputs: tuple[str, ...] = ()
-    #: the error (relative to each output's scale, docs/accuracy.md) the default preset must reach on ``main_outputs``
-    tolerance: float = 1e-4
-    #: sweep dimensions the stage's computation couples (e.g. a derivative along ``p``): the
-    #: engine never chunks them, whatever the scene's ``[numerics] chunks`` says
-    unchunked: tuple[str, ...] = ()
-    #: of a whole section named in ``params`` whose tables have a ``kind`` (``[substrate]``,
-    #: ``[solid]``), the keys the stage reads for each kind: ``{section: {kind: keys, "*": keys}}``
-    #: ("*": every kind not listed; a kind in neither: every key). The stage is handed, and its
-    #: content key covers, only these keys and ``kind`` (e.g. the topography stage reads a
-    #: measured surface's map keys, not its ``extend``, which only the psd stage reads).
-    reads: Mapping[str, Mapping[str, tuple[str, ...]]] = field(default_factory=dict)
+    doc: str = ""
+
+    @property
+    def keys(self) -> tuple[str, ...]:
+        """The scene keys (dotted, or whole sections) the stage reads."""
+        return tuple(r.section if isinstance(r, ByKind) else r for r in self.reads)
+
+    @property
+    def requires(self) -> tuple[str, ...]:
+        """Every upstream stage it may need."""
+        return tuple(u.stage if isinstance(u, Upstream) else u for u in self.needs)
+
+    def upstream_for(self, values: Mapping[str, Any]) -> tuple[str, ...]:
+        """The upstream stages a scene (its section values) needs."""
+        return tuple(u if isinstance(u, str) else u.stage for u in self.needs
+                     if isinstance(u, str) or u.applies(values))
+
+    @property
+    def measured(self) -> dict[str, float]:
+        """The outputs whose error ``roughcontact accuracy`` measures, with their tolerance."""
+        return {name: var.tolerance for name, var in self.outputs.items() if var.tolerance is not None}
 
     def section_view(self, name: str, value):
         """What the stage is handed of the scene value ``value`` of its declared key ``name``:
-        the value itself, or, for a section in :attr:`reads`, a :class:`SectionKeys` of the keys
+        the value itself, or, for a :class:`ByKind` section, a :class:`SectionKeys` of the keys
         the stage reads."""
-        if name not in self.reads or not isinstance(value, Mapping):
+        by_kind = next((r.keys for r in self.reads if isinstance(r, ByKind) and r.section == name), None)
+        if by_kind is None or not isinstance(value, Mapping):
             return value
-        by_kind = self.reads[name]
         keys = by_kind.get(value.get("kind"), by_kind.get("*"))
         if keys is None:
             return value
@@ -194,18 +229,22 @@ class SectionKeys(dict):
 
 
 @dataclass(frozen=True)
-class Preview:
-    """What a stage's result will look like, known before it computes (no data).
+class Shape:
+    """What a stage's result looks like, known before it computes (no data): the one description
+    of it that the preflight, the downstream stages' checks, the size estimates and the stage's
+    own ``compute`` (as ``inp.shape``) share; the engine refuses a computed result that differs.
 
-    ``sizes``: dimension -> length; ``ranges``: coordinate or 1-D variable -> (lowest, highest
-    finite value); ``variables``: the data variables it will hold; ``attrs``: global attributes
-    known in advance; ``keys``: the scene key that sets each dimension's size. A stage's ``validate`` hook returns one for its own result; downstream
-    ``validate`` hooks and the size estimates read it as ``inp.upstream[stage]``.
+    A stage's ``describe`` returns the dimensions it adds itself (the scene's sweep dimensions it
+    spans are added by the engine); a stored result's shape is :meth:`of` its file.
     """
 
+    #: dimension -> length
     sizes: Mapping[str, int] = field(default_factory=dict)
+    #: coordinate or small 1-D variable -> (lowest, highest finite value)
     ranges: Mapping[str, tuple[float, float]] = field(default_factory=dict)
+    #: the data variables it will hold (of a stored result)
     variables: frozenset = frozenset()
+    #: global attributes known in advance (``attrs["note"]``: a line ``plan`` and ``run`` print)
     attrs: Mapping[str, Any] = field(default_factory=dict)
     #: the scene key that sets the size of each dimension the stage adds (e.g. {"q":
     #: "numerics.points_per_decade"}), named when a result would be too large for the machine
@@ -214,10 +253,24 @@ class Preview:
     coords: Mapping[str, np.ndarray] = field(default_factory=dict)
     #: finite values of (small) 1-D data variables known in advance (e.g. measured bins' mean q)
     values: Mapping[str, np.ndarray] = field(default_factory=dict)
+    #: the sizes of the largest arrays one point of the scene's sweep holds while it computes, as
+    #: factors (e.g. {"temporaries": 6, "quadrature_node": 4000}): working memory per sweep point
+    #: = 8 bytes times their product (empty: a few temporaries of every output value)
+    work: Mapping[str, int] = field(default_factory=dict)
+    #: sweep dimensions the computation couples (e.g. a derivative along ``p``): never chunked
+    coupled: tuple[str, ...] = ()
+    #: dimensions whose length depends on the data (an adaptive grid): ``sizes`` holds an estimate,
+    #: used for the size checks; the engine holds the computed result to every other size
+    approximate: tuple[str, ...] = ()
+    #: output variable -> the dimensions it does not span (of the sweep's and the stage's own;
+    #: default: every output spans every dimension), for the size of the stored result; a
+    #: coordinate over more than its own dimension (a stress grid per point) counts when named here
+    #: (with the dimensions it does not span, if any)
+    lacks: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
 
     @classmethod
-    def of(cls, ds: xr.Dataset, small: int = 10**6, values_up_to: int = 10**4) -> "Preview":
-        """The preview of a stored result (its coordinates and small 1-D variables are read)."""
+    def of(cls, ds: xr.Dataset, small: int = 10**6, values_up_to: int = 10**4) -> "Shape":
+        """The shape of a stored (or computed) result (its coordinates and small 1-D variables are read)."""
         ranges, coords, data = {}, {}, {}
         for name, var in ds.variables.items():
             if var.ndim == 1 and var.size <= small and var.dtype.kind in "fiu":
@@ -250,6 +303,10 @@ class StageInput:
         Names of the optional output variables the scene asked for.
     chunks
         Dask chunk sizes per sweep dimension (from the scene's numerics); 0 or absent: unchunked.
+    shape
+        In ``compute``: the :class:`Shape` the stage's ``describe`` gave (with the sweep
+        dimensions it spans), e.g. the q grid or the magnifications; in ``describe``,
+        ``upstream`` holds the upstream results' shapes instead of Datasets (in ``check``, none).
     """
 
     params: Mapping[str, Any]
@@ -258,6 +315,7 @@ class StageInput:
     wanted: frozenset[str] = frozenset()
     chunks: Mapping[str, int] = field(default_factory=dict)
     stage: str = "?"
+    shape: "Shape | None" = None
     #: the engine's :class:`roughcontact.progress.Reporter` (None: no progress shown)
     reporter: Any = None
 
@@ -408,7 +466,7 @@ def check_declarations(all_stages: Mapping[str, Stage], all_sections: Mapping[st
     """Every scene key a stage declares exists in the schema, every upstream stage exists, and no
     stage redeclares a shared coordinate. Raises ValueError (a bug in a stage) otherwise."""
     for st in all_stages.values():
-        for dotted in st.params:
+        for dotted in st.keys:
             section, _, key = dotted.partition(".")
             if section not in all_sections:
                 raise ValueError(f"stage {st.name} reads {dotted!r}: there is no scene section [{section}]")
@@ -419,11 +477,15 @@ def check_declarations(all_stages: Mapping[str, Stage], all_sections: Mapping[st
             if key and key not in names:
                 raise ValueError(f"stage {st.name} reads {dotted!r}: [{section}] has no key {key!r}")
         for f in st.files:
-            if f.param not in st.params and f.param.partition(".")[0] not in st.params:
+            if f.param not in st.keys and f.param.partition(".")[0] not in st.keys:
                 raise ValueError(f"stage {st.name} reads the file of {f.param!r} without declaring that key in params")
         for up in st.requires:
             if up not in all_stages:
-                raise ValueError(f"stage {st.name} requires {up!r}, which is not a stage")
+                raise ValueError(f"stage {st.name} needs {up!r}, which is not a stage")
+        for when in (u.when for u in st.needs if isinstance(u, Upstream)):
+            unknown = [k for k in when if k.partition(".")[0] not in {*all_sections, "outputs"}]
+            if unknown:
+                raise ValueError(f"stage {st.name} needs an upstream stage when {unknown[0]!r}: no such scene section")
         _check_reads(st, all_sections)
         shared = sorted(set(st.coords) & set(shared_coords))
         if shared:
@@ -431,14 +493,14 @@ def check_declarations(all_stages: Mapping[str, Stage], all_sections: Mapping[st
 
 
 def _check_reads(st: Stage, all_sections: Mapping[str, Section]) -> None:
-    """Every section in a stage's ``reads`` is one of its whole-section params with kinds, and
-    every key it names exists for that kind."""
-    for name, by_kind in st.reads.items():
-        if name not in st.params or name not in all_sections or not all_sections[name].discriminator:
-            raise ValueError(f"stage {st.name} selects keys of {name!r}, which is not a whole section with kinds "
-                             f"in its params")
+    """Every :class:`ByKind` selection names a section with kinds, and every key it names exists
+    for that kind."""
+    for selection in (r for r in st.reads if isinstance(r, ByKind)):
+        name = selection.section
+        if name not in all_sections or not all_sections[name].discriminator:
+            raise ValueError(f"stage {st.name} selects keys of {name!r}, which is not a section with kinds")
         sec = all_sections[name]
-        for kind, keys in by_kind.items():
+        for kind, keys in selection.keys.items():
             if kind != "*" and kind not in sec.variants:
                 raise ValueError(f"stage {st.name} reads keys of [{name}] kind {kind!r}, which does not exist")
             names = {p.name for p in sec.params}

@@ -18,12 +18,12 @@ from roughcontact.physics.adhesion import (
 )
 from roughcontact.physics.volterra import solve_partial_contact, vanishing_hrms_from_sweep
 from roughcontact.stage import (
-    ComputationError, Figure, Param, Preview, Section, Stage, StageInput, UserError, Var, register, register_params,
+    ComputationError, Figure, Param, Section, Shape, Stage, StageInput, UserError, Var, register, register_params,
     register_section,
 )
 
 from .figures.adhesion import figure_one_surface, figure_two_surfaces
-from .shared import MATERIAL_KEYS, e_star
+from .shared.material import MATERIAL_KEYS, e_star
 
 # ----------------------------------------------------------------------------------------
 # Scene sections
@@ -165,23 +165,27 @@ def _models(spec):
     return model, c0, c1
 
 
-def validate_adhesion(inp: StageInput) -> Preview:
-    """Before anything computes: the binding energy is given and the vanishing hrms can be sought
-    (zero load, a substrate hrms sweep); returns the nominal size of the Volterra grid."""
+def check_adhesion(inp: StageInput) -> None:
+    """The binding energy is given, and the vanishing hrms is sought at zero load."""
     spec = inp["adhesion"]
     _binding_energy(spec, e_star(inp))
-    psd = inp.upstream["psd"]
-    if spec["vanishing_hrms"]:
-        if spec["sigma0"] != 0:
-            raise UserError("the hrms at which adhesion vanishes is defined at zero load: set adhesion.sigma0 = 0 "
-                            "or adhesion.vanishing_hrms = false", key="adhesion.vanishing_hrms")
-        if psd.sizes.get("hrms_substrate", 0) < 2:
-            raise UserError("needs substrate.hrms as a sweep (a list or {from, to, num}) that reaches detachment",
-                            key="adhesion.vanishing_hrms")
+    if spec["vanishing_hrms"] and spec["sigma0"] != 0:
+        raise UserError("the hrms at which adhesion vanishes is defined at zero load: set adhesion.sigma0 = 0 "
+                        "or adhesion.vanishing_hrms = false", key="adhesion.vanishing_hrms")
+
+
+def describe_adhesion(inp: StageInput) -> Shape:
+    """The size of the Volterra grid of magnifications (approximate: its offset is adapted to the
+    spectrum when it computes), and the models compared; the vanishing hrms needs the spectra
+    over a substrate hrms sweep."""
+    spec, psd = inp["adhesion"], inp.upstream["psd"]
+    if spec["vanishing_hrms"] and psd.sizes.get("hrms_substrate", 0) < 2:
+        raise UserError("needs substrate.hrms as a sweep (a list or {from, to, num}) that reaches detachment",
+                        key="adhesion.vanishing_hrms")
     lo, hi = psd.ranges["q"]
     nodes = zeta_grid(hi / lo, inp["numerics.adhesion_points_per_decade"], inp["numerics.adhesion_zeta_offset"])
-    return Preview(sizes={"zeta": int(nodes.size), **({"model": len(spec["model"])} if len(spec["model"]) > 1 else {})},
-                   keys={"zeta": "numerics.adhesion_points_per_decade", "model": "adhesion.model"})
+    return Shape(sizes={"zeta": int(nodes.size), **({"model": len(spec["model"])} if len(spec["model"]) > 1 else {})},
+                 keys={"zeta": "numerics.adhesion_points_per_decade", "model": "adhesion.model"}, approximate=("zeta",))
 
 
 def compute_adhesion(inp: StageInput) -> xr.Dataset:
@@ -279,11 +283,10 @@ STAGE = register(
         name="adhesion",
         version="1",
         compute=compute_adhesion,
-        validate=validate_adhesion,
-        requires=("psd",),
-        main_outputs=("hrms_substrate_vanishing",),
-        tolerance=1e-3,
-        params=(*MATERIAL_KEYS, "adhesion", "numerics.adhesion_points_per_decade",
+        check=check_adhesion,
+        describe=describe_adhesion,
+        needs=("psd",),
+        reads=(*MATERIAL_KEYS, "adhesion", "numerics.adhesion_points_per_decade",
                 "numerics.adhesion_zeta_offset", "numerics.adhesion_K_min", "numerics.adhesion_tolerance"),
         outputs={
             "gamma_eff_macroscopic": Var("J/m^2", "effective interfacial energy gamma_eff at the lowest magnification, "
@@ -302,7 +305,8 @@ STAGE = register(
             "delta_gamma": Var("J/m^2", "interfacial binding energy Delta_gamma of flat surfaces"),
             "adhesion_length": Var("m", "adhesion length delta = 4 Delta_gamma / E* (eq 14)"),
             "hrms_substrate_vanishing": Var("m", "substrate rms roughness at which adhesion vanishes (gamma_eff(1) and "
-                                            "A/A0 reach 0 together; root along the attached branch, zero load)"),
+                                            "A/A0 reach 0 together; root along the attached branch, zero load)",
+                                            tolerance=1e-3),
         },
         coords={"model": Var("1", "elastic-energy factor model S_el (eq 10)")},
         figures=(

@@ -16,7 +16,7 @@ import numpy as np
 import xarray as xr
 
 from roughcontact.physics.uncertainty import quantiles
-from roughcontact.stage import Figure, Stage, StageInput, UserError, Var, register
+from roughcontact.stage import Figure, Stage, StageInput, Upstream, UserError, Var, register
 
 from .adhesion import STAGE as ADHESION
 from .contact import STAGE as CONTACT
@@ -52,9 +52,16 @@ def _band_var(st: Stage, var: str) -> Var:
                optional=f"{var}_band" not in ALWAYS, attrs={"comment": _COMMENT})
 
 
-def _needed(values) -> tuple[str, ...]:
-    asked = set(values["outputs"]["variables"]) & set(SOURCE)
-    return tuple(sorted({"psd"} | {SOURCE[v][0].name for v in asked}))
+def _needs() -> tuple:
+    """The psd stage always; each other stage when a band of one of its variables is asked for."""
+    return ("psd", *(Upstream(st.name, when={"outputs.variables": tuple(f"{v}_band" for v in names)})
+                     for st, names in BANDED if st is not PSD))
+
+
+def check_bands(inp: StageInput) -> None:
+    """Bands need spectrum draws (``[bands] draws`` > 0)."""
+    if np.ndim(inp["bands.draws"]) == 0:
+        raise UserError("bands need spectrum draws: set [bands] draws (e.g. 200)", key="bands.draws")
 
 
 def _on_nominal_stress_grid(da: xr.DataArray) -> xr.DataArray:
@@ -84,8 +91,6 @@ def band(da: xr.DataArray, probabilities) -> xr.DataArray:
 
 
 def compute_bands(inp: StageInput) -> xr.Dataset:
-    if np.ndim(inp["bands.draws"]) == 0:
-        raise UserError("bands need spectrum draws: set [bands] draws (e.g. 200)", key="bands.draws")
     if "draw" not in inp.upstream["psd"]["psd_combined"].dims:
         raise UserError("no surface is measured (kind 'topography' or 'container'): its spectra carry no statistical "
                         "band to draw from", key="bands.draws")
@@ -114,9 +119,9 @@ register(
         name="bands",
         version="1",
         compute=compute_bands,
-        requires=tuple(st.name for st, _ in BANDED),
-        needed=_needed,
-        params=("bands.draws", "bands.level"),
+        needs=_needs(),
+        check=check_bands,
+        reads=("bands.draws", "bands.level"),
         outputs={name: _band_var(st, var) for name, (st, var) in SOURCE.items()},
         coords={"quantile": Var("1", "probability level of the quantile over the spectrum draws"),
                 **CONTACT.coords, **ADHESION.coords},

@@ -5,7 +5,7 @@ Kernels: :mod:`roughcontact.physics.synthesis` (random pairs with the psd stage'
 coherence, seed eqs 4, 41, 52; the band limit of a measured map), :mod:`roughcontact.physics.bem`
 (the Tamaas solver, an optional dependency) and :mod:`roughcontact.physics.estimators` (rms
 slope of a map). The measured maps (``bem.surfaces``) are checked by
-:mod:`roughcontact.stages.maps`. Figure: :mod:`roughcontact.stages.figures.bem`.
+:mod:`roughcontact.stages.shared.maps`. Figure: :mod:`roughcontact.stages.figures.bem`.
 
 The comparison uses one band on both sides: roughness on qL <= |q| <= q_cut on an N x N
 periodic map of side L = 2 pi / qL, the theory read at zeta_bem = q_cut / qL, which the scene
@@ -21,13 +21,14 @@ from roughcontact.physics.bem import SolverMissing, SubPixelContact, contact_pai
 from roughcontact.physics.estimators import rms_slope_of_map
 from roughcontact.physics.synthesis import band_limit, grid_band, synthesize_pair, white_noise_pair
 from roughcontact.stage import (
-    Figure, Param, Section, Stage, StageInput, UserError, Var, register, register_params, register_section,
+    Figure, Param, Section, Shape, Stage, StageInput, UserError, Var, register, register_params, register_section,
 )
 
 from .figures.bem import figure_bem_comparison, figure_bem_reduced_pressure
-from .maps import check_eta, map_band, map_surfaces, measured_maps, topography_files
-from .shared import E_STAR, MAP_KEYS, MATERIAL_KEYS, e_star, surface_reads
-from .variants import VARIANT_KEYS, VARIANTS, theory_variants, variant_attrs
+from .shared.maps import check_eta, map_band, map_surfaces, measured_maps, topography_files
+from .shared.material import E_STAR, MATERIAL_KEYS, e_star
+from .shared.surfaces import MAP_KEYS, surface_reads
+from .shared.variants import VARIANT_KEYS, VARIANTS, theory_variants, variant_attrs
 
 #: the optional dependency and how to install it (named in the error without it)
 EXTRA = 'pip install "roughcontact[bem]"'
@@ -114,7 +115,7 @@ def single_surfaces(sizes) -> None:
 
 
 def check_bem(inp: StageInput) -> None:
-    """Before anything else is checked: the optional dependency, and usable measured maps."""
+    """The optional dependency, and usable measured maps."""
     solver()
     names = map_surfaces(inp)
     check_eta(inp, names)
@@ -122,16 +123,17 @@ def check_bem(inp: StageInput) -> None:
         measured_maps(inp, names)
 
 
-def validate_bem(inp: StageInput) -> None:
-    """Before anything computes: one pair of surfaces, and the BEM's magnification among those the
-    contact and separation stages compute."""
+def describe_bem(inp: StageInput) -> Shape:
+    """No dimension known in advance; the scene must give one pair of surfaces, and the BEM's
+    magnification must be among those the contact and separation stages compute (where the stage
+    reads them: the interface_bem stage does not)."""
+    names = map_surfaces(inp)
+    maps = measured_maps(inp, names) if names else None
     psd = inp.upstream["psd"]
     single_surfaces(psd.sizes)
-    names = map_surfaces(inp)
     lo, hi = psd.ranges["q"]
     n_w = inp["bem.pixels_per_wavelength"]
-    if names:
-        maps = measured_maps(inp, names)
+    if maps is not None:
         _, zeta, limit = map_band(lo, hi, maps["n"], maps["side"], maps["q_reliable"], n_w)
     else:
         zeta, limit = grid_band(lo, hi, inp["bem.grid"], n_w)[3], "bem.grid and bem.pixels_per_wavelength"
@@ -139,6 +141,7 @@ def validate_bem(inp: StageInput) -> None:
         values = inp.upstream[stage].coords.get("zeta") if stage in inp.upstream else None
         if values is not None:
             _zeta_index(values, zeta, stage, limit)
+    return Shape()
 
 
 def bem_band(inp: StageInput, q: np.ndarray, names: tuple[str, ...]) -> dict:
@@ -333,14 +336,13 @@ register(
         version="3",
         compute=compute_bem,
         check=check_bem,
-        validate=validate_bem,
-        requires=("psd", "contact", "separation"),
-        params=(*MATERIAL_KEYS, "load.p", "interface.eta", "substrate", "solid", "bem.surfaces",
-                "bem.grid", "bem.realizations", "bem.seed", "bem.pixels_per_wavelength", "numerics.bem_tolerance",
-                "numerics.bem_stress_bins", "numerics.sigma_width", *VARIANT_KEYS),
+        describe=describe_bem,
+        needs=("psd", "contact", "separation"),
         # measured maps (kind = "topography"): the engine reads them; used when bem.surfaces allows.
         # Synthesized surfaces come from the psd stage's spectra: of those sections, only the kind
-        reads=surface_reads({"topography": MAP_KEYS, "*": ()}),
+        reads=(*MATERIAL_KEYS, "load.p", "interface.eta", *surface_reads({"topography": MAP_KEYS, "*": ()}),
+               "bem.surfaces", "bem.grid", "bem.realizations", "bem.seed", "bem.pixels_per_wavelength",
+               "numerics.bem_tolerance", "numerics.bem_stress_bins", "numerics.sigma_width", *VARIANT_KEYS),
         files=(topography_files("substrate"), topography_files("solid")),
         outputs={
             "bem_contact_area_ratio": Var("1", "relative contact area A/A0 from the BEM (fraction of pixels in "

@@ -15,7 +15,7 @@ from roughcontact.physics.interface import barber_conductance, barber_resistance
 from roughcontact.stage import Figure, Param, Section, Stage, StageInput, UserError, Var, register, register_section
 
 from .figures.interface import figure_conductance
-from .shared import MATERIAL_KEYS, e_star
+from .shared.material import MATERIAL_KEYS, e_star
 
 #: (scene key prefix, what it is, SI units) of the two transport properties
 PROPERTIES = {"thermal": ("thermal_conductivity", "thermal conductivity", "W/(m*K)"),
@@ -54,15 +54,15 @@ def _series(inp: StageInput, kind: str):
     return values["substrate"] + values["solid"]
 
 
-def validate_conductance(inp: StageInput) -> None:
-    """At least one of the two properties for both bodies (before anything computes)."""
+def check_conductance(inp: StageInput) -> None:
+    """At least one of the two properties, for both bodies."""
     if _series(inp, "thermal") is None and _series(inp, "electrical") is None:
         raise UserError("the conductance stage needs the thermal conductivities or the electrical resistivities of "
                         "both bodies (e.g. thermal_conductivity_substrate = \"50 W/(m*K)\")", key="conductance")
 
 
 def compute_conductance(inp: StageInput) -> xr.Dataset:
-    validate_conductance(inp)
+    check_conductance(inp)
     up = inp.upstream["stiffness"]
     E_star = e_star(inp)
     K, D = up["contact_stiffness"], up["stiffness_length"]
@@ -90,9 +90,9 @@ register(
         name="conductance",
         version="1",
         compute=compute_conductance,
-        validate=validate_conductance,
-        requires=("stiffness",),
-        params=(*MATERIAL_KEYS, "load.p", *KEYS),
+        check=check_conductance,
+        needs=("stiffness",),
+        reads=(*MATERIAL_KEYS, "load.p", *KEYS),
         outputs={
             "thermal_contact_conductance": Var("W/(m^2*K)", "thermal contact conductance per unit nominal area "
                                                "h = 2 K / (E* (1/kappa1 + 1/kappa2))", attrs={"comment": ASSUMPTIONS}),

@@ -14,11 +14,12 @@ import xarray as xr
 
 from roughcontact.physics.contact import contact_area_ratio, persson_G, stress_distribution_adaptive
 from roughcontact.physics.corrections import CORRECTIONS, corrected_G
-from roughcontact.stage import Figure, Param, Preview, Stage, StageInput, Var, register, register_params
+from roughcontact.stage import Figure, Param, Shape, Stage, StageInput, Var, register, register_params
 
 from .figures.contact import figure_contact_area, figure_stress_distribution
-from .shared import (CORRECTION_KEYS, E_STAR, MATERIAL_KEYS, Q_REFERENCE, area_correction, e_star, zeta_preview,
-                     zeta_values)
+from .shared.grid import Q_REFERENCE
+from .shared.magnification import CORRECTION_KEYS, area_correction, zeta_shape, zeta_values
+from .shared.material import E_STAR, MATERIAL_KEYS, e_star
 
 register_params(
     "numerics",
@@ -73,34 +74,29 @@ def _correction_attrs(inp: StageInput) -> dict:
     return attrs
 
 
-def validate_contact(inp: StageInput) -> Preview:
-    """Before anything computes: the magnifications asked for lie on the psd stage's q grid;
-    returns the sizes of the dimensions the stage adds (zeta, and the stress grid). A correction's
-    gamma that makes S(A/A0) <= 0 is refused here too."""
+def check_contact(inp: StageInput) -> None:
+    """A correction's gamma that makes S(A/A0) <= 0 is refused."""
     area_correction(inp)
-    zeta = zeta_preview(inp, inp.upstream["psd"])
-    if "stress_distribution" not in inp.wanted:
-        return zeta
+
+
+def describe_contact(inp: StageInput) -> Shape:
+    """The dimensions the stage adds (zeta, which must lie on the psd stage's q grid and see the
+    rough surfaces, and the stress grid when P(sigma) is asked for) and
+    its working memory per sweep point: a few float64 temporaries, times the stress grid when
+    P(sigma) is asked for, times the q grid when zeta = "all". G does not span p, and nothing but
+    P and its stress grid sigma spans the stress grid; zeta is computed whole."""
+    zeta = zeta_shape(inp, inp.upstream["psd"])
+    stress = "stress_distribution" in inp.wanted
+    work = {"temporaries": 8 * (inp["numerics.sigma_points"] if stress else 2),
+            **({"q": inp.upstream["psd"].sizes["q"]} if isinstance(inp["contact.zeta"], str) else {})}
+    lacks = {"G": ("p", "stress_level"), "contact_area_ratio": ("stress_level",), "E_star": ("p", "zeta", "stress_level"),
+             "qL": ("p", "zeta", "stress_level")}
+    if not stress:
+        return dataclasses.replace(zeta, work=work, lacks=lacks, coupled=("zeta",))
+    lacks.update(stress_distribution_mass=("stress_level",), sigma=())  # written with P: its mass, its stress grid
     return dataclasses.replace(zeta, sizes={**zeta.sizes, "stress_level": inp["numerics.sigma_points"]},
-                               keys={**zeta.keys, "stress_level": "numerics.sigma_points"})
-
-
-def _result_bytes(params, wanted, sizes) -> int:
-    """G over everything but p; A/A0 (and the mass of P) over everything but the stress grid; P and
-    sigma over everything (the engine adds the coordinates)."""
-    full = int(np.prod(list(sizes.values()), dtype=float))
-    area = full // sizes.get("stress_level", 1)
-    stress = 2 * full + area if "stress_distribution" in wanted else 0
-    return 8 * (area // sizes.get("p", 1) + area + stress)
-
-
-def _point_bytes(params, wanted, upstream) -> int:
-    """Working memory per sweep point: a few float64 temporaries, times the stress grid when
-    P(sigma) is asked for, times the q grid when zeta = "all" adds a dimension of that size."""
-    per = 8 * 4 * (params["numerics.sigma_points"] if "stress_distribution" in wanted else 2)
-    if isinstance(params["contact.zeta"], str) and "psd" in upstream:
-        per *= upstream["psd"].sizes["q"]
-    return per
+                               keys={**zeta.keys, "stress_level": "numerics.sigma_points"}, work=work, lacks=lacks,
+                               coupled=("zeta",))
 
 
 STAGE = register(
@@ -108,13 +104,13 @@ STAGE = register(
         name="contact",
         version="3",
         compute=compute_contact,
-        requires=("psd",),
-        params=(*MATERIAL_KEYS, "load.p", "contact.zeta", "numerics.sigma_points", "numerics.sigma_width",
+        needs=("psd",),
+        reads=(*MATERIAL_KEYS, "load.p", "contact.zeta", "numerics.sigma_points", "numerics.sigma_width",
                 *CORRECTION_KEYS),
         outputs={
             "G": Var("Pa^2", "Persson's G(zeta) = (pi/4) E*^2 int_qL^(zeta qL) q^3 C dq (eq 17)"),
             "contact_area_ratio": Var("1", "relative contact area A/A0 = erf(p / 2 sqrt G) (eq 19; with "
-                                              "contact.correction: G -> G_eff, attribute 'correction')"),
+                                              "contact.correction: G -> G_eff, attribute 'correction')", tolerance=1e-4),
             "E_star": E_STAR,
             "qL": Q_REFERENCE,
             "stress_distribution": Var("1/Pa", "stress distribution P(sigma; p, zeta) (eq 16)", optional=True),
@@ -134,12 +130,8 @@ STAGE = register(
             Figure("fig4_stress_distribution", "P(sigma) (seed Fig. 4)", ("contact",), figure_stress_distribution,
                    outputs=("stress_distribution",)),
         ),
+        check=check_contact,
+        describe=describe_contact,
         doc="G(zeta), A/A0(p, zeta, eta) and optionally P(sigma; p, zeta, eta).",
-        point_bytes=_point_bytes,
-        validate=validate_contact,
-        result_bytes=_result_bytes,
-        unchunked=("zeta",),
-        main_outputs=("contact_area_ratio",),
-        tolerance=1e-4,
     )
 )

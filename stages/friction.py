@@ -22,8 +22,8 @@ from roughcontact.stage import Figure, Param, Section, Stage, StageInput, UserEr
 
 from .figures.friction import figure_area_eta, figure_area_substrate, figure_mu_eta, figure_mu_substrate, figure_psds
 from .figures.flash import figure_flash
-from .flash import FLASH_KEYS, FLASH_NUMERICS, FLASH_OUTPUTS, FLASH_PARAMS, check_flash, compute_flash, flash_attrs
-from .shared import CORRECTION_KEYS, area_correction
+from .shared.flash import FLASH_KEYS, FLASH_NUMERICS, FLASH_OUTPUTS, FLASH_PARAMS, check_flash, compute_flash, flash_attrs
+from .shared.magnification import CORRECTION_KEYS, area_correction
 
 # ----------------------------------------------------------------------------------------
 # Scene section and numerics
@@ -146,14 +146,14 @@ STAGE = register(
         name="friction",
         version="2",
         compute=compute_friction,
-        requires=("modulus", "psd"),
-        main_outputs=("friction_coefficient", "sliding_contact_area_ratio"),
-        tolerance=1e-4,
-        params=(*CORRECTION_KEYS, "load.p", "material.nu", "friction.v", "friction.correction", "friction.gamma",
+        needs=("modulus", "psd"),
+        check=check_flash,
+        reads=(*CORRECTION_KEYS, "load.p", "material.nu", "friction.v", "friction.correction", "friction.gamma",
                 "numerics.friction_phi_nodes", "numerics.friction_segment_nodes") + FLASH_KEYS,
         outputs={
-            "friction_coefficient": Var("1", "hysteretic friction coefficient mu (eq 61)"),
-            "sliding_contact_area_ratio": Var("1", "relative contact area while sliding A/A0 = P(q1) (eqs 31, 62)"),
+            "friction_coefficient": Var("1", "hysteretic friction coefficient mu (eq 61)", tolerance=1e-4),
+            "sliding_contact_area_ratio": Var("1", "relative contact area while sliding A/A0 = P(q1) (eqs 31, 62)",
+                                              tolerance=1e-4),
             "sliding_G": Var("1", "G(q; v) of eq 62 (corrected: |E|^2, upper limit q), sigma0^2 absorbed",
                              optional=True),
             "friction_density": Var("1", "contribution to mu per unit ln q, d mu / d ln q", optional=True),

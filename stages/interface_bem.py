@@ -22,11 +22,11 @@ from roughcontact.physics.leakage import BRUGGEMAN_AREA, leak_rate, leakage_kern
 from roughcontact.physics.reynolds import flow_factors, percolates
 from roughcontact.stage import Figure, Param, Stage, StageInput, Var, register, register_params
 
-from .bem import bem_band, bem_eta_values, check_bem, map_pairs, single_surfaces, solve_pair
+from .bem import bem_band, bem_eta_values, check_bem, describe_bem, map_pairs, single_surfaces, solve_pair
 from .figures.interface_bem import figure_interface_bem
 from .leakage import NUMERICS as LEAKAGE_NUMERICS, SEAL_KEYS, leakage_settings, seal_parameters
-from .maps import check_eta, map_surfaces, topography_files
-from .shared import E_STAR, MATERIAL_KEYS, e_star
+from .shared.maps import check_eta, map_surfaces, topography_files
+from .shared.material import E_STAR, MATERIAL_KEYS, e_star
 from .stiffness import SEPARATION_KEYS, separation_settings
 
 register_params(
@@ -47,11 +47,6 @@ def _solver(inp, E_star, dx, tick):
         return solve_pair(h1, h2, dx, E_star, np.sort(pressures), tolerance=inp["numerics.bem_tolerance"], fields=True,
                           progress=tick)
     return solve
-
-
-def validate_interface_bem(inp: StageInput) -> None:
-    """Before anything computes: one pair of surfaces (no hrms sweep, no spectrum draws)."""
-    single_surfaces(inp.upstream["psd"].sizes)
 
 
 def _open(gap, axis) -> bool:
@@ -193,9 +188,9 @@ register(
         version="1",
         compute=compute_interface_bem,
         check=check_bem,
-        validate=validate_interface_bem,
-        requires=("psd",),
-        params=(*MATERIAL_KEYS, "load.p", *BEM_KEYS, *SEPARATION_KEYS, *SEAL_KEYS, "leakage.percolation_area",
+        describe=describe_bem,
+        needs=("psd",),
+        reads=(*MATERIAL_KEYS, "load.p", *BEM_KEYS, *SEPARATION_KEYS, *SEAL_KEYS, "leakage.percolation_area",
                 *LEAKAGE_NUMERICS, "numerics.interface_bem_step", "numerics.interface_bem_bisections"),
         files=(topography_files("substrate"), topography_files("solid")),
         outputs={

@@ -13,10 +13,10 @@ from __future__ import annotations
 import xarray as xr
 
 from roughcontact.physics.leakage import BRUGGEMAN_AREA, PERCOLATION_AREA, leak_rate, leakage_kernel, sealing_pressure
-from roughcontact.stage import Figure, Param, Section, Stage, StageInput, Var, register, register_params, register_section
+from roughcontact.stage import Figure, Param, Section, Shape, Stage, StageInput, Var, register, register_params, register_section
 
 from .figures.interface import figure_leakage
-from .shared import MATERIAL_KEYS, e_star
+from .shared.material import MATERIAL_KEYS, e_star
 from .stiffness import SEPARATION_KEYS, separation_settings
 
 register_section(
@@ -93,12 +93,14 @@ def compute_leakage(inp: StageInput) -> xr.Dataset:
     return ds
 
 
-def _point_bytes(params, wanted, upstream) -> int:
-    """Per (p, eta) point: the gap distribution's distribution function on (magnifications x gap
-    bins), about 15 decades of zeta - 1 by 10 decades of u, a few float64 temporaries."""
-    magnifications = 15 * int(params["numerics.leakage_points_per_decade"]) + 2
-    bins = 10 * int(params["numerics.leakage_bins_per_decade"]) + 3
-    return 8 * 4 * magnifications * bins
+def describe_leakage(inp: StageInput) -> Shape:
+    """No dimension of its own; working memory per (p, eta) point: the gap distribution's
+    distribution function on (magnifications x gap bins), about 15 decades of zeta - 1 by 10
+    decades of u, a few float64 temporaries. The sealing pressures do not span p."""
+    magnifications = 15 * int(inp["numerics.leakage_points_per_decade"]) + 2
+    bins = 10 * int(inp["numerics.leakage_bins_per_decade"]) + 3
+    return Shape(work={"temporaries": 4, "magnification": magnifications, "gap_bin": bins},
+                 lacks={"sealing_pressure_critical_junction": ("p",), "sealing_pressure_effective_medium": ("p",)})
 
 
 FLOW = "Q = (W/L) sigma dp / (12 mu), sigma = "
@@ -107,11 +109,12 @@ register(
         name="leakage",
         version="1",
         compute=compute_leakage,
-        requires=("psd",),
-        params=(*MATERIAL_KEYS, "load.p", *SEPARATION_KEYS, *SEAL_KEYS, "leakage.percolation_area", *NUMERICS),
+        needs=("psd",),
+        reads=(*MATERIAL_KEYS, "load.p", *SEPARATION_KEYS, *SEAL_KEYS, "leakage.percolation_area", *NUMERICS),
         outputs={
             "leak_rate_critical_junction": Var("m^3/s", "leak rate of the seal, critical-junction theory "
-                                                        "(Persson & Yang 2008)", attrs={"formula": FLOW + "u1^3"}),
+                                                        "(Persson & Yang 2008)", attrs={"formula": FLOW + "u1^3"},
+                                               tolerance=1e-4),
             "leak_rate_effective_medium": Var("m^3/s", "leak rate of the seal, effective-medium theory "
                                                        "(Lorenz & Persson 2010)", attrs={"formula": FLOW + "Bruggeman"}),
             "flow_factor_critical_junction": Var("m^3", "effective flow factor u1^3 of the critical junction"),
@@ -126,8 +129,6 @@ register(
         },
         figures=(Figure("leakage", "leak rate of the seal against the contact pressure", ("leakage",), figure_leakage),),
         doc="Leak rate of a seal over (p, eta): critical-junction and effective-medium theories.",
-        point_bytes=_point_bytes,
-        main_outputs=("leak_rate_critical_junction",),
-        tolerance=1e-4,
+        describe=describe_leakage,
     )
 )

@@ -40,8 +40,8 @@ from roughcontact.stage import (
 
 from .figures.mastercurve import figure_master_curve
 from .figures.modulus import figure_modulus
-from .mastercurve import DMA_COORDS, DMA_OUTPUTS, DMA_PARAMS, dma_options, dma_variables, master_curve, shift_spec
-from .mastercurve import model as dma_model
+from .shared.mastercurve import DMA_COORDS, DMA_OUTPUTS, DMA_PARAMS, dma_options, dma_variables, master_curve, shift_spec
+from .shared.mastercurve import model as dma_model
 
 
 def complex_modulus(ds: xr.Dataset) -> xr.DataArray:
@@ -231,9 +231,9 @@ def _times(spec) -> tuple[float, float] | None:
     return None
 
 
-def validate_modulus(inp: StageInput) -> None:
-    """Before anything computes: the [modulus] section and the temperature shift (the engine's
-    reader has checked a master-curve file: units, NaNs, increasing frequency, moduli' signs)."""
+def check_modulus(inp: StageInput) -> None:
+    """The [modulus] section and the temperature shift (the engine's reader has checked a
+    master-curve file: units, NaNs, increasing frequency, moduli' signs)."""
     spec = inp["modulus"]
     if spec is None:
         raise UserError(_NO_SECTION, key="modulus")
@@ -335,8 +335,8 @@ register(
         name="modulus",
         version="2",
         compute=compute_modulus,
-        validate=validate_modulus,
-        params=("modulus", "numerics.modulus_points_per_decade"),
+        check=check_modulus,
+        reads=("modulus", "numerics.modulus_points_per_decade"),
         files=(FileInput("modulus.path", reader="master_curve", options=_master_curve_options),
                FileInput("modulus.sweeps", reader="dma", options=dma_options)),
         outputs={

@@ -2,7 +2,7 @@
 combination C(q, eta) (seed eq 52).
 
 Kernels: :mod:`roughcontact.physics.spectra`. The surface sections are declared in
-:mod:`roughcontact.stages.shared`.
+:mod:`roughcontact.stages.shared.surfaces`.
 """
 
 from __future__ import annotations
@@ -22,11 +22,12 @@ from roughcontact.physics.spectra import (
     self_affine_hrms_factor,
     self_affine_psd,
 )
-from roughcontact.stage import FileInput, Preview, Stage, StageInput, UserError, Var, register
+from roughcontact.stage import FileInput, Shape, Stage, StageInput, UserError, Upstream, Var, register
 
-from .maps import measured_coherence_on_grid, measured_psd_on_grid
-from .measured import coherence_error_grid, drawn_coherence, drawn_psd, psd_error_grid
-from .shared import SURFACES, is_measured, is_rough, needs_topography, scope_attrs, surface_bands, surface_reads
+from .shared.maps import measured_coherence_on_grid, measured_psd_on_grid
+from .shared.measured import coherence_error_grid, drawn_coherence, drawn_psd, psd_error_grid
+from .shared.grid import scope_attrs
+from .shared.surfaces import MEASURED_SURFACES, SURFACES, is_measured, is_rough, surface_bands, surface_reads
 
 
 def _check_extent(name: str, spec: dict, spectrum, lo: float, hi: float) -> None:
@@ -58,7 +59,7 @@ def _measured(name: str, spec: dict, spectrum, q_grid: np.ndarray) -> tuple[np.n
     return extend_psd(q_grid, q_si, C, how if how != "none" else "zero"), attrs
 
 
-def _measured_knots(inp: StageInput, topography: Preview | None) -> list[float]:
+def _measured_knots(inp: StageInput, topography: Shape | None) -> list[float]:
     """The wavenumbers between which a measured PSD is interpolated (the rows of a PSD file, the
     mean wavenumbers of measured bins), where the interpolated PSD has kinks. As nodes of the q
     grid no interval straddles a kink: a file's log-log interpolation is then integrated exactly
@@ -79,7 +80,7 @@ def _measured_knots(inp: StageInput, topography: Preview | None) -> list[float]:
     return knots
 
 
-def _q_range(inp: StageInput, topography: Preview | None) -> tuple[float, float, list[float]]:
+def _q_range(inp: StageInput, topography: Shape | None) -> tuple[float, float, list[float]]:
     """The q grid's ends and knots, from the surfaces' bands (``topography``: the preview of the
     topography stage's result, for measured maps)."""
     bands = surface_bands(inp, topography)
@@ -99,11 +100,15 @@ def _q_range(inp: StageInput, topography: Preview | None) -> tuple[float, float,
     return lo, hi, knots
 
 
-def validate_psd(inp: StageInput) -> Preview:
-    """Before anything computes: the q grid (its range, that the files cover it), the coherence
-    asked for; returns the q grid's size and range for the downstream checks."""
-    topography = inp.upstream.get("topography")
-    lo, hi, knots = _q_range(inp, topography)
+def check_psd(inp: StageInput) -> None:
+    """Spectrum draws need a measured surface to draw from."""
+    if np.ndim(inp["bands.draws"]) and not any(is_measured(inp[name]) for name in SURFACES):
+        raise UserError("no surface is measured (kind 'topography' or 'container'): its spectra carry no statistical "
+                        "band to draw from; set bands.draws = 0", key="bands.draws")
+
+
+def _check_coverage(inp: StageInput, topography: Shape | None, lo: float, hi: float) -> None:
+    """The files (or measured maps) cover the q grid; the coherence asked for can be had."""
     for name in SURFACES:
         spec = inp[name]
         if is_rough(spec) and spec["kind"] == "psd_file":
@@ -118,10 +123,23 @@ def validate_psd(inp: StageInput) -> Preview:
         why = topography.attrs.get("pairing", "") if topography is not None else ""
         raise UserError("eta = 'measured' needs both surfaces of kind 'topography' (or 'container'), paired on the same "
                         "grid" + (f" ({why})" if why else ""), key="interface.eta")
+
+
+def describe_psd(inp: StageInput) -> Shape:
+    """The q grid (its size and range, which the files or measured maps must cover; its nodes up
+    to a million, approximate where they include
+    measured bins not yet computed) and what the stages over zeta need to know of it (the
+    reference wavenumber qL, the surfaces' bands); working memory: a few temporaries over the
+    grid per sweep point."""
+    topography = inp.upstream.get("topography")
+    lo, hi, knots = _q_range(inp, topography)
+    _check_coverage(inp, topography, lo, hi)
     size = log_grid_size(lo, hi, inp["numerics.points_per_decade"], knots)
     grid = {"q": log_grid(lo, hi, inp["numerics.points_per_decade"], knots)} if size <= 10**6 else {}
-    return Preview(sizes={"q": size}, ranges={"q": (lo, hi)}, keys={"q": "numerics.points_per_decade"}, coords=grid,
-                   attrs=scope_attrs(inp, topography, lo))
+    # measured bins' mean wavenumbers are nodes of the grid; before the topography stage computes they are approximate
+    approximate = ("q",) if topography is not None and topography.approximate else ()
+    return Shape(sizes={"q": size}, ranges={"q": (lo, hi)}, keys={"q": "numerics.points_per_decade"}, coords=grid,
+                 attrs=scope_attrs(inp, topography, lo), work={"temporaries": 8, "q": size}, approximate=approximate)
 
 
 def _surface(inp: StageInput, name: str, q: xr.DataArray, draw):
@@ -174,7 +192,7 @@ def _combined(inp: StageInput, surfaces, q: xr.DataArray, draw):
 
 
 def compute_psd(inp: StageInput) -> xr.Dataset:
-    topography = Preview.of(inp.upstream["topography"]) if "topography" in inp.upstream else None
+    topography = Shape.of(inp.upstream["topography"]) if "topography" in inp.upstream else None
     lo, hi, knots = _q_range(inp, topography)
     q_values = log_grid(lo, hi, inp["numerics.points_per_decade"], knots)
     q = xr.DataArray(q_values, dims=("q",))
@@ -224,15 +242,13 @@ STAGE = register(
         name="psd",
         version="3",
         compute=compute_psd,
-        params=("substrate", "solid", "interface.eta", "grid.q_min", "grid.q_max", "numerics.points_per_decade",
-                "bands.draws", "bands.seed"),
         # a measured surface's spectrum comes from the topography stage: of it, only how to extend it
-        reads=surface_reads({"topography": ("extend",), "container": ("extend",)}),
+        reads=(*surface_reads({"topography": ("extend",), "container": ("extend",)}), "interface.eta", "grid.q_min",
+               "grid.q_max", "numerics.points_per_decade", "bands.draws", "bands.seed"),
         files=(_files("substrate"), _files("solid")),
-        requires=("topography",),
-        needed=lambda values: ("topography",) if needs_topography(values) else (),
-        validate=validate_psd,
-        point_bytes=lambda params, wanted, upstream: 8 * 8 * (upstream["psd"].sizes["q"] if "psd" in upstream else 64),
+        needs=(Upstream("topography", when=MEASURED_SURFACES),),
+        check=check_psd,
+        describe=describe_psd,
         outputs={
             "psd_substrate": Var("m^4", "power spectral density of the substrate (C1, Persson convention)"),
             "psd_solid": Var("m^4", "power spectral density of the solid (C2, Persson convention)"),

@@ -8,6 +8,8 @@ its module docstring). Figure: :mod:`roughcontact.stages.figures.separation` (se
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import xarray as xr
 
@@ -24,7 +26,7 @@ from roughcontact.physics.separation import (
 from roughcontact.stage import (
     Figure,
     Param,
-    Preview,
+    Shape,
     Section,
     Stage,
     StageInput,
@@ -36,8 +38,9 @@ from roughcontact.stage import (
 )
 
 from .figures.separation import figure_separation
-from .shared import (CORRECTION_KEYS, E_STAR, MATERIAL_KEYS, Q_REFERENCE, area_correction, e_star, zeta_preview,
-                     zeta_values)
+from .shared.grid import Q_REFERENCE
+from .shared.magnification import CORRECTION_KEYS, area_correction, zeta_shape, zeta_values
+from .shared.material import E_STAR, MATERIAL_KEYS, e_star
 
 register_section(
     Section(
@@ -90,12 +93,20 @@ def separation_variant(inp: StageInput) -> tuple[float, str]:
     return (alpha, "none") if name == "persson" else (gamma, name)
 
 
-def validate_separation(inp: StageInput) -> Preview:
-    """Before anything computes: the magnifications lie on the psd stage's q grid (and, with
-    refinement "contact", the contact correction's gamma is usable)."""
+def check_separation(inp: StageInput) -> None:
+    """With refinement "contact", the contact correction's gamma must be usable."""
     if inp["separation.refinement"] == "contact":
         area_correction(inp)
-    return zeta_preview(inp, inp.upstream["psd"])
+
+
+def describe_separation(inp: StageInput) -> Shape:
+    """The magnifications (on the psd stage's q grid; computed whole) and the working memory per
+    sweep point: a few float64 temporaries over the quadrature nodes, about order x (q nodes +
+    depth x panels per decade)."""
+    panels = int(np.ceil(float(inp["numerics.separation_depth"]) * inp["numerics.separation_panels_per_decade"]))
+    nodes = (int(inp.upstream["psd"].sizes["q"]) + panels + 1) * int(inp["numerics.separation_gauss_points"])
+    return dataclasses.replace(zeta_shape(inp, inp.upstream["psd"]), work={"temporaries": 6, _NODES: nodes},
+                               coupled=("zeta",), lacks={"separation_u0": ("p",), "separation_beta": ("p",)})
 
 
 def compute_separation(inp: StageInput) -> xr.Dataset:
@@ -152,16 +163,6 @@ def compute_separation(inp: StageInput) -> xr.Dataset:
     return ds
 
 
-def _point_bytes(params, wanted, upstream) -> int:
-    """Working memory per sweep point: a few float64 temporaries over the quadrature nodes (about
-    order x (q nodes + depth x panels per decade); ``upstream`` holds results or previews)."""
-    if "psd" not in upstream or "q" not in upstream["psd"].sizes:
-        return 512
-    panels = int(np.ceil(float(params["numerics.separation_depth"]) * params["numerics.separation_panels_per_decade"]))
-    nodes = (int(upstream["psd"].sizes["q"]) + panels + 1) * int(params["numerics.separation_gauss_points"])
-    return 8 * 6 * nodes
-
-
 def _beta_attrs(refinement: str) -> dict:
     extra = {"none": "", "yang_persson": " times exp(3 (1 - alpha) J2(0) / alpha), J2(0) = %.10f (Yang-Persson)"
              % float(power_J(0.0, 2)),
@@ -182,13 +183,13 @@ STAGE = register(
         name="separation",
         version="2",
         compute=compute_separation,
-        validate=validate_separation,
-        unchunked=("zeta",),
-        requires=("psd",),
-        params=(*MATERIAL_KEYS, "load.p", "contact.zeta", "separation.alpha", "separation.refinement", *_NUMERICS,
+        check=check_separation,
+        describe=describe_separation,
+        needs=("psd",),
+        reads=(*MATERIAL_KEYS, "load.p", "contact.zeta", "separation.alpha", "separation.refinement", *_NUMERICS,
                 *CORRECTION_KEYS),
         outputs={
-            "mean_separation": Var("m", "mean interfacial separation u(p) (eq 57)"),
+            "mean_separation": Var("m", "mean interfacial separation u(p) (eq 57)", tolerance=1e-4),
             "separation_u0": Var("m", "decay length u0 of the small-pressure law p = beta E* exp(-u/u0) (eq 59)"),
             "separation_beta": Var("1", "prefactor beta of the small-pressure law p = beta E* exp(-u/u0) (eq 60)"),
             "E_star": E_STAR,
@@ -196,8 +197,5 @@ STAGE = register(
         },
         figures=(Figure("fig5_separation", "log10(p/E*) against u (seed Fig. 5)", ("separation",), figure_separation),),
         doc="Mean interfacial separation u(p, zeta, eta) (eq 57) and its small-pressure law u0, beta (eqs 59-60).",
-        main_outputs=("mean_separation",),
-        tolerance=1e-4,
-        point_bytes=_point_bytes,
     )
 )

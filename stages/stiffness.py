@@ -14,10 +14,11 @@ import xarray as xr
 
 from roughcontact.physics.interface import stiffness_from_psd
 from roughcontact.physics.separation import REFINEMENTS
-from roughcontact.stage import Figure, Stage, StageInput, UserError, Var, register
+from roughcontact.stage import Figure, Shape, Stage, StageInput, UserError, Var, register
 
 from .figures.interface import figure_stiffness
-from .shared import E_STAR, MATERIAL_KEYS, e_star, zeta_values
+from .shared.magnification import zeta_values
+from .shared.material import E_STAR, MATERIAL_KEYS, e_star
 
 #: the scene keys of eq 57 and its quadrature (declared by the separation stage)
 SEPARATION_KEYS = ("separation.alpha", "separation.refinement", "numerics.separation_panels_per_decade",
@@ -63,14 +64,14 @@ def compute_stiffness(inp: StageInput) -> xr.Dataset:
                        "E_star": xr.DataArray(E_star)})
 
 
-def _point_bytes(params, wanted, upstream) -> int:
-    """Per (p, eta) point: the Gaussian factor on every separation node (a few float64 temporaries),
-    plus one value per magnification."""
-    nq = upstream["psd"].sizes["q"] if "psd" in upstream else 200
-    nodes = (nq + params["numerics.separation_depth"] * params["numerics.separation_panels_per_decade"] + 2) \
-        * params["numerics.separation_gauss_points"]
-    zetas = nq if isinstance(params["contact.zeta"], str) else np.size(params["contact.zeta"])
-    return int(8 * (4 * nodes + zetas))
+def describe_stiffness(inp: StageInput) -> Shape:
+    """Working memory per (p, eta) point: the Gaussian factor on every separation node (a few
+    float64 temporaries), plus one value per magnification."""
+    nq = inp.upstream["psd"].sizes["q"]
+    nodes = (nq + inp["numerics.separation_depth"] * inp["numerics.separation_panels_per_decade"] + 2) \
+        * inp["numerics.separation_gauss_points"]
+    zetas = nq if isinstance(inp["contact.zeta"], str) else np.size(inp["contact.zeta"])
+    return Shape(work={"values": int(4 * nodes + zetas)}, lacks={"E_star": ("p", "zeta")})
 
 
 INFINITE = ("+inf where the interface adds no compliance: the surfaces fit exactly (combined PSD zero, e.g. "
@@ -82,11 +83,11 @@ register(
         name="stiffness",
         version="1",
         compute=compute_stiffness,
-        requires=("psd", "separation"),
-        params=(*MATERIAL_KEYS, "load.p", "contact.zeta", *SEPARATION_KEYS),
+        needs=("psd", "separation"),
+        reads=(*MATERIAL_KEYS, "load.p", "contact.zeta", *SEPARATION_KEYS),
         outputs={
             "contact_stiffness": Var("Pa/m", "normal contact stiffness per unit nominal area K = -dp/du",
-                                     attrs={"comment": INFINITE}),
+                                     attrs={"comment": INFINITE}, tolerance=1e-4),
             "stiffness_length": Var("m", "-du/d(ln p) = p / K, the decay length of the separation law at p "
                                          "(-> u0 at small load)"),
             "small_load_stiffness": Var("Pa/m", "small-load limit p/u0 of the contact stiffness (u0 of eq 59)"),
@@ -95,8 +96,6 @@ register(
         figures=(Figure("stiffness", "contact stiffness K = -dp/du against p/E*, and K u0/p",
                         ("stiffness", "separation"), figure_stiffness),),
         doc="Normal contact stiffness per unit area K(p, zeta, eta) = -dp/du, analytic in p from eq 57.",
-        point_bytes=_point_bytes,
-        main_outputs=("contact_stiffness",),
-        tolerance=1e-4,
+        describe=describe_stiffness,
     )
 )

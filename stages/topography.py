@@ -2,7 +2,7 @@
 surfaces -> cross-spectrum and coherence eta(q) (seed eqs 4, 41).
 
 Kernels: :mod:`roughcontact.physics.estimators`. The files are read (in metres) by the
-engine's topography reader and checked and prepared by :mod:`roughcontact.stages.maps`.
+engine's topography reader and checked and prepared by :mod:`roughcontact.stages.shared.maps`.
 Figures: :mod:`roughcontact.stages.figures.topography`. See docs/topography.md.
 """
 
@@ -22,12 +22,12 @@ from roughcontact.physics.estimators import (
     second_surface_hurst,
 )
 from roughcontact.physics.lattice import binned_wavenumbers
-from roughcontact.stage import Figure, Param, Preview, Stage, StageInput, UserError, Var, register, register_params
+from roughcontact.stage import Figure, Param, Shape, Stage, StageInput, UserError, Var, register, register_params
 
 from .figures.topography import figure_coherence, figure_measured_psd
-from .maps import topography_files
-from .measured import container_files, merged_psd, mode_factor, prepared_files
-from .shared import CONTAINER_KEYS, MAP_KEYS, SURFACES, is_measured, surface_reads
+from .shared.maps import topography_files
+from .shared.measured import container_files, merged_psd, mode_factor, prepared_files
+from .shared.surfaces import CONTAINER_KEYS, MAP_KEYS, SURFACES, is_measured, surface_reads
 
 register_params(
     "numerics",
@@ -117,10 +117,11 @@ def _prepared(inp: StageInput):
     return specs, prepared, edges, pair_note
 
 
-def validate_topography(inp: StageInput) -> Preview:
+def describe_topography(inp: StageInput) -> Shape:
     """Before anything computes: every file read, checked and prepared (units, sizes, missing
-    points, flat maps, reliable band); returns the measured wavenumber range of each surface
-    (from the Fourier lattice alone, no FFT) and whether the pair gives a coherence."""
+    points, flat maps, reliable band; a bad one is refused here); the bins, the measured
+    wavenumber range of each surface (from the Fourier lattice alone, no FFT) and whether the
+    pair gives a coherence."""
     specs, prepared, edges, pair_note = _prepared(inp)
     paired = len(specs) == 2 and pair_note is None
     ranges, values, bins = {}, {}, np.zeros(edges.size - 1, bool)
@@ -134,12 +135,14 @@ def validate_topography(inp: StageInput) -> Preview:
             raise UserError("the measured maps give fewer than two wavenumber bins",
                             key=f"{name}.{'container' if specs[name]['kind'] == 'container' else 'files'}")
         ranges[f"q_{name}_measured"] = (float(np.nanmin(q)), float(np.nanmax(q)))
-        values[f"q_{name}_measured"] = q[np.isfinite(q)]  # as computed: the psd stage puts them in its q grid
+        # the bins' mean wavenumbers from the lattice alone (the psd stage puts them in its q grid); the computed
+        # ones weight the modes of several files by their spectra, so they are approximate here
+        values[f"q_{name}_measured"] = q[np.isfinite(q)]
     variables = {f"{kind}_{name}_measured" for name in specs for kind in ("psd", "q")}
     variables |= {"coherence", "cross_psd_measured", "coherence_error"} if paired else set()
     pairing = "paired" if paired else f"not paired: {pair_note}" if pair_note else "not paired: one surface only"
-    return Preview(sizes={"q_bin": int(np.ptp(np.flatnonzero(bins))) + 1}, ranges=ranges,
-                   variables=frozenset(variables), attrs={"pairing": pairing}, values=values)
+    return Shape(sizes={"q_bin": int(np.ptp(np.flatnonzero(bins))) + 1}, ranges=ranges,
+                 variables=frozenset(variables), attrs={"pairing": pairing}, values=values, approximate=tuple(values))
 
 
 def compute_topography(inp: StageInput) -> xr.Dataset:
@@ -174,11 +177,10 @@ register(
         name="topography",
         version="2",
         compute=compute_topography,
-        params=("substrate", "solid", "numerics.topography_bins_per_decade"),
         # of a measured surface the map keys and the line-scan H; of any other surface only its kind
-        reads=surface_reads({"topography": (*MAP_KEYS, "hurst"), "container": (*CONTAINER_KEYS, "hurst"),
-                             "*": ()}),
-        validate=validate_topography,
+        reads=(*surface_reads({"topography": (*MAP_KEYS, "hurst"), "container": (*CONTAINER_KEYS, "hurst"), "*": ()}),
+               "numerics.topography_bins_per_decade"),
+        describe=describe_topography,
         files=(topography_files("substrate"), topography_files("solid"), container_files("substrate"),
                container_files("solid")),
         outputs={

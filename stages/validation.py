@@ -17,13 +17,13 @@ import numpy as np
 import xarray as xr
 
 from roughcontact.physics.validation import FIELDS, bem_block
-from roughcontact.stage import Figure, Param, Section, Stage, StageInput, Var, register, register_section
+from roughcontact.stage import Figure, Param, Section, Shape, Stage, StageInput, Var, register, register_section
 
 from .bem import solver
 from .figures.validation import figure_kappa, figure_separation_ratio
-from .shared import MATERIAL_KEYS
-from .validation_table import OUTPUTS as TABLE_OUTPUTS, TABLE_COORDS, case_kwargs, compute_table
-from .variants import VARIANT_KEYS
+from .shared.material import MATERIAL_KEYS
+from .shared.validation_table import OUTPUTS as TABLE_OUTPUTS, TABLE_COORDS, case_kwargs, compute_table
+from .shared.variants import VARIANT_KEYS
 
 register_section(
     Section(
@@ -62,7 +62,8 @@ BEM_KEYS = (*MATERIAL_KEYS, "interface.eta", "numerics.bem_tolerance", "numerics
                                           "hrms_substrate", "hrms_solid", "lattice")))
 
 
-def _validate(inp: StageInput) -> None:
+def check_validation_bem(inp: StageInput) -> None:
+    """The optional dependency (tamaas)."""
     solver()
 
 
@@ -110,11 +111,13 @@ def _one_per_block(da: xr.DataArray) -> xr.DataArray:
     return da.chunk({d: 1 for d in da.dims}) if da.dims else da
 
 
-def _task_bytes(params, wanted, upstream) -> int:
-    """Working memory per load of a task: the solver's fields, about 200 bytes per pixel of the
-    largest map (docs/bem.md: ~150 measured), shared by the task's loads."""
-    loads = max(np.size(params["validation.reduced_pressure"]), 1)
-    return int(200 * params["validation.max_grid"] ** 2 / loads) + 64
+def describe_validation_bem(inp: StageInput) -> Shape:
+    """Working memory per load of a task: the solver's fields, about 200 bytes (25 values) per
+    pixel of the largest map (docs/bem.md: ~150 measured), shared by the task's loads, which one
+    task solves together (never chunked)."""
+    loads = max(np.size(inp["validation.reduced_pressure"]), 1)
+    return Shape(work={"values_per_pixel": 25, "pixels": int(inp["validation.max_grid"]) ** 2, "per_load": 1 / loads},
+                 coupled=("reduced_pressure",))
 
 
 _DIMS = "(hurst, bandwidth, eta, realization, pixels_per_wavelength, reduced_pressure)"
@@ -132,16 +135,15 @@ register(
         name="validation_bem",
         version="1",
         compute=compute_validation_bem,
-        validate=_validate,
-        params=BEM_KEYS,
+        check=check_validation_bem,
+        describe=describe_validation_bem,
+        reads=BEM_KEYS,
         outputs={
             "validation_bem_contact_area_ratio": Var("1", f"BEM relative contact area per task {_DIMS}"),
             "validation_bem_mean_gap": Var("m", f"BEM mean interfacial separation per task {_DIMS}"),
             "validation_bem_seconds_per_solve": Var("s", "wall time of the task divided by the pressures it solved"),
         },
         coords=TASK_COORDS,
-        point_bytes=_task_bytes,
-        unchunked=("reduced_pressure",),
         doc="The validation's BEM tasks: synthesized pairs solved at every reduced pressure, per (H, bandwidth, eta, "
             "realization, pixels per wavelength).",
     )
@@ -152,8 +154,8 @@ register(
         name="validation",
         version="1",
         compute=compute_table,
-        requires=("validation_bem",),
-        params=BEM_KEYS + VARIANT_KEYS,
+        needs=("validation_bem",),
+        reads=BEM_KEYS + VARIANT_KEYS,
         outputs=TABLE_OUTPUTS,
         coords={**TASK_COORDS, **TABLE_COORDS},
         figures=(Figure("validation_kappa", "kappa = (A/A0) E* g / p against p/(E* g): theory variants and BEM",

@@ -56,7 +56,7 @@ def _timed(sc, force):
 
 def _stage(name, sc, upstream):
     st = stages()[name]
-    return st.compute(StageInput(params={k: sc.get(k) for k in st.params}, upstream=upstream, stage=name))
+    return st.compute(StageInput(params={k: sc.get(k) for k in st.keys}, upstream=upstream, stage=name))
 
 
 def _predict(sc, topo, picks):

@@ -47,7 +47,7 @@ def scene(**numerics):
 
 def run_stage(name, sc, upstream=None):
     st = stages()[name]
-    inp = StageInput(params={k: sc.get(k) for k in st.params}, upstream=upstream or {})
+    inp = StageInput(params={k: sc.get(k) for k in st.keys}, upstream=upstream or {})
     return st.compute(inp)
 
 

@@ -1,6 +1,8 @@
 """The layout rules of docs/architecture.md hold: one package, layers that import only
-downwards, no private imports, small modules and functions, metadata and scene keys declared
-once and checked, dimensions a stage couples never chunked, and the page's worked example runs."""
+downwards, no private imports, a small stage declaration, folders that hold what they say,
+metadata and scene keys declared once and checked, one description of a result's shape that the
+engine holds the computation to, checks before any write, dimensions a stage couples never
+chunked, and the page's worked example runs."""
 
 from __future__ import annotations
 
@@ -18,8 +20,8 @@ import pytest
 import xarray as xr
 
 import roughcontact
-from roughcontact import engine, scene as scenes, stage as stage_api
-from roughcontact.stage import Stage, StageInput, Var
+from roughcontact import engine, scene as scenes, sizing, stage as stage_api
+from roughcontact.stage import Shape, Stage, StageInput, UserError, Var
 
 from conftest import make_scene
 
@@ -93,34 +95,38 @@ def test_no_module_imports_a_private_name_of_another():
     assert not bad, "\n".join(bad)
 
 
-def test_modules_and_functions_stay_small():
-    long_modules, long_functions = [], []
-    for layer in LAYERS:
-        for path in _sources(layer):
-            source = path.read_text()
-            if source.count("\n") > 450:
-                long_modules.append(f"{path.relative_to(ROOT)}: {source.count(chr(10))} lines")
-            for node in ast.walk(ast.parse(source)):
-                if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
-                    n = node.end_lineno - node.lineno + 1
-                    if n > 80:
-                        long_functions.append(f"{path.relative_to(ROOT)}:{node.lineno} {node.name}: {n} lines")
-    assert not long_modules and not long_functions, "\n".join(long_modules + long_functions)
+def test_a_stage_declaration_stays_small():
+    """One description per stage: at most 12 fields, at most 3 of them functions (compute,
+    describe, check)."""
+    fields = dataclasses.fields(Stage)
+    callables = [f.name for f in fields if "Callable" in str(f.type)]
+    assert len(fields) <= 12, [f.name for f in fields]
+    assert sorted(callables) == ["check", "compute", "describe"]
+
+
+def test_the_stages_folder_holds_stages():
+    """Every module directly in stages/ registers a stage; what stages share lives in
+    stages/shared/, figures in stages/figures/."""
+    registry = stage_api.stages()
+    modules = {st.compute.__module__ for st in registry.values()}
+    for path in sorted((ROOT / "stages").glob("*.py")):
+        if path.name != "__init__.py":
+            assert f"roughcontact.stages.{path.stem}" in modules, f"{path.relative_to(ROOT)} registers no stage"
 
 
 def test_E_star_is_derived_in_one_place():
     callers = [p.relative_to(ROOT) for p in _sources("stages") if "effective_modulus(" in p.read_text()]
-    assert callers == [Path("stages/shared.py")]
+    assert callers == [Path("stages/shared/material.py")]
 
 
 def test_every_declared_scene_key_exists_and_a_misspelt_one_is_caught():
     registry, schema, shared = stage_api.stages(), stage_api.sections(), stage_api.coords()
     stage_api.check_declarations(registry, schema, shared)
     contact = registry["contact"]
-    misspelt = dataclasses.replace(contact, params=contact.params + ("material.poisson",))
+    misspelt = dataclasses.replace(contact, reads=contact.reads + ("material.poisson",))
     with pytest.raises(ValueError, match=r"material\.poisson"):
         stage_api.check_declarations({**registry, "contact": misspelt}, schema, shared)
-    no_section = dataclasses.replace(contact, params=("materials.E",))
+    no_section = dataclasses.replace(contact, reads=("materials.E",))
     with pytest.raises(ValueError, match=r"no scene section \[materials\]"):
         stage_api.check_declarations({**registry, "contact": no_section}, schema, shared)
     redeclared = dataclasses.replace(contact, coords={"p": Var("Pa", "pressure")})
@@ -131,7 +137,7 @@ def test_every_declared_scene_key_exists_and_a_misspelt_one_is_caught():
 
 
 def _toy(name, compute, **kwargs):
-    return Stage(name=name, version="1", compute=compute, requires=("psd",), **kwargs)
+    return Stage(name=name, version="1", compute=compute, needs=("psd",), **kwargs)
 
 
 @pytest.fixture
@@ -182,11 +188,45 @@ def test_a_dimension_the_stage_couples_is_never_chunked(toy_registry):
     raw["numerics"]["chunks"] = {"p": 2, "eta": 1}
     sc = scenes.from_dict(raw)
     free = toy_registry(_toy("toy_free", lambda inp: None, outputs={"toy_a": Var("1", "a")}))
-    coupled = toy_registry(_toy("toy_coupled", lambda inp: None, outputs={"toy_b": Var("1", "b")}, unchunked=("p",)))
-    assert engine.stage_chunks(sc, free, {}) == {"p": 2, "eta": 1}
-    assert engine.stage_chunks(sc, coupled, {}) == {"eta": 1}
-    inp = StageInput(params={}, chunks=engine.stage_chunks(sc, coupled, {}))
+    coupled = toy_registry(_toy("toy_coupled", lambda inp: None, outputs={"toy_b": Var("1", "b")},
+                                describe=lambda inp: Shape(coupled=("p",))))
+    assert sizing.stage_chunks(sc, free, frozenset(), Shape()) == {"p": 2, "eta": 1}
+    chunks = sizing.stage_chunks(sc, coupled, frozenset(), coupled.describe(None))
+    assert chunks == {"eta": 1}
+    inp = StageInput(params={}, chunks=chunks)
     assert inp.sweep("p", np.arange(9.0)).chunks is None
+
+
+def test_a_result_unlike_its_description_is_refused(tmp_path, toy_registry):
+    """describe and compute cannot drift: the engine compares the computed result with the shape
+    the preflight relied on."""
+    def compute(inp):
+        return xr.Dataset({"toy_level": xr.DataArray(np.zeros(4), dims=("toy_node",))})
+
+    toy_registry(_toy("toy_drift", compute, outputs={"toy_level": Var("1", "level")},
+                      coords={"toy_node": Var("1", "node")}, describe=lambda inp: Shape(sizes={"toy_node": 5})))
+    with pytest.raises(RuntimeError, match="toy_node of size 4, but its describe said 5"):
+        _run(tmp_path, "toy_level")
+
+
+def test_a_check_refuses_before_anything_is_written(tmp_path, toy_registry):
+    def check(inp):
+        raise UserError("toy rule between keys", key="load.p")
+
+    toy_registry(_toy("toy_checked", lambda inp: pytest.fail("computed"), outputs={"toy_c": Var("1", "c")},
+                      check=check))
+    with pytest.raises(UserError, match="toy rule"):
+        _run(tmp_path, "toy_c")
+    assert not list((tmp_path / "out").glob("*.nc"))  # not even the upstream psd result
+
+
+def test_an_upstream_stage_needed_only_by_some_scenes_is_data():
+    psd = stage_api.stages()["psd"]
+    assert psd.upstream_for({"substrate": {"kind": "self_affine"}, "solid": {"kind": "smooth"}}) == ()
+    assert psd.upstream_for({"substrate": {"kind": "self_affine"}, "solid": {"kind": "container"}}) == ("topography",)
+    bands = stage_api.stages()["bands"]
+    assert bands.upstream_for({"outputs": {"variables": ["psd_combined_band"]}}) == ("psd",)
+    assert set(bands.upstream_for({"outputs": {"variables": ["mean_separation_band"]}})) == {"psd", "separation"}
 
 
 def test_the_architecture_page_example_runs_as_written(tmp_path):

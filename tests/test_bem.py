@@ -34,7 +34,7 @@ from roughcontact.physics.synthesis import (
 )
 from roughcontact.stages.bem import EXTRA, solve_pair
 from roughcontact.stages.figures.bem import figure_bem_comparison
-from roughcontact.stages.maps import map_band
+from roughcontact.stages.shared.maps import map_band
 
 # a self-affine PSD in reduced units: qL = 1 (map side 2 pi), roll-off at 4, cut-off 100
 Q = np.geomspace(1.0, 100.0, 201)

@@ -1,4 +1,4 @@
-"""Flash temperature (friction.flash; physics/flash.py, stages/flash.py).
+"""Flash temperature (friction.flash; physics/flash.py, stages/shared/flash.py).
 
 Facts checked: the isothermal theory is recovered for vanishing speed and for infinite thermal
 conductivity; the temperature rise is non-negative and grows with v where E'' does not fall with

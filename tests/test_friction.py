@@ -201,10 +201,10 @@ def _stage_at(sc, v):
 
     values = sc.values
     get = lambda key: values[key.partition(".")[0]] if "." not in key else values[key.partition(".")[0]][key.partition(".")[2]]  # noqa: E731
-    psd = ps.compute_psd(StageInput(params={k: get(k) for k in ps.STAGE.params}))
+    psd = ps.compute_psd(StageInput(params={k: get(k) for k in ps.STAGE.keys}))
     mod = md.compute_modulus(StageInput(params={"modulus": values["modulus"],
                                                "numerics.modulus_points_per_decade": values["numerics"]["modulus_points_per_decade"]}))
-    params = {k: get(k) for k in fr.STAGE.params}
+    params = {k: get(k) for k in fr.STAGE.keys}
     params["friction.v"] = v
     out = fr.compute_friction(StageInput(params=params, upstream={"psd": psd, "modulus": mod}))
     sel = out.sel(eta=0.0)

@@ -124,7 +124,7 @@ def test_the_flat_map_error_names_the_map_on_the_command_line(tmp_path, capsys, 
     assert code == 2 and str(tmp_path / "flat.npy") in err and "substrate.files" in err
 
 
-def test_previews_give_the_q_grid_the_stages_then_compute(tmp_path):
+def test_shapes_give_the_q_grid_the_stages_then_compute(tmp_path):
     """The validate hooks' q grid (size and range) is exactly the psd stage's, for analytic surfaces,
     measured PSD files and measured maps alike (so the checks before computing are the right ones)."""
     from roughcontact import preflight
@@ -132,11 +132,11 @@ def test_previews_give_the_q_grid_the_stages_then_compute(tmp_path):
     topo = scenes.load("topography")
     for sc in (scenes.from_dict(make_scene(numerics=SMALL)), topo, topo.variants["substrate_only"]):
         plans = [p for p in engine.plan(sc, tmp_path / sc.name) if p.variant == "base"]
-        _, previews = preflight.validate(plans, {"base": sc}, tmp_path)
+        _, shapes = preflight.check(plans, {"base": sc}, tmp_path)
         res = engine.run(sc, tmp_path / sc.name, targets=["psd_combined"], report=engine.Reporter(None))
         q = res["base"]["psd"]["q"].values
-        assert previews[("base", "psd")].sizes["q"] == q.size
-        assert previews[("base", "psd")].ranges["q"] == pytest.approx((q[0], q[-1]), rel=1e-12)
+        assert shapes[("base", "psd")].sizes["q"] == q.size
+        assert shapes[("base", "psd")].ranges["q"] == pytest.approx((q[0], q[-1]), rel=1e-12)
 
 
 # ----------------------------------------------------------------------------------------
@@ -185,7 +185,7 @@ def test_a_large_but_feasible_sweep_is_accepted(tmp_path, monkeypatch):
 
     monkeypatch.setattr(sizing, "available_memory", lambda: 2 * 10**9)
     sc = scenes.load("large_sweep")
-    preflight.validate(engine.plan(sc, tmp_path), {"base": sc}, tmp_path)
+    preflight.check(engine.plan(sc, tmp_path), {"base": sc}, tmp_path)
 
 
 # ----------------------------------------------------------------------------------------

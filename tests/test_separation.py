@@ -60,9 +60,9 @@ def run_in_memory(raw):
     out = {}
     for variant, scv in (("base", sc), *sc.variants.items()):
         psd_stage, sep_stage = stages()["psd"], stages()["separation"]
-        psd = psd_stage.compute(StageInput(params={k: scv.get(k) for k in psd_stage.params}, chunks=scv.chunks))
+        psd = psd_stage.compute(StageInput(params={k: scv.get(k) for k in psd_stage.keys}, chunks=scv.chunks))
         out[variant] = sep_stage.compute(
-            StageInput(params={k: scv.get(k) for k in sep_stage.params}, upstream={"psd": psd}, chunks=scv.chunks))
+            StageInput(params={k: scv.get(k) for k in sep_stage.keys}, upstream={"psd": psd}, chunks=scv.chunks))
     return out
 
 

@@ -6,7 +6,7 @@ its q grid.
 Not a stage (it registers nothing). Kernels: :mod:`roughcontact.physics.preprocessing` and
 :mod:`roughcontact.physics.estimators`. The
 ``[substrate]`` / ``[solid]`` keys of ``kind = "topography"`` are declared in
-:mod:`roughcontact.stages.shared`; docs/topography.md describes them.
+:mod:`roughcontact.stages.shared.surfaces`; docs/topography.md describes them.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ from roughcontact.physics.preprocessing import detrend, hann_window_1d, hann_win
 from roughcontact.physics.uncertainty import bin_curvature_factor, interpolation_unbiasing
 from roughcontact.stage import FileInput, UserError
 
-from .shared import DETREND_DEGREE, SURFACES, is_rough, is_topography
+from .surfaces import DETREND_DEGREE, SURFACES, is_rough, is_topography
 
 
 def topography_files(name: str) -> FileInput:

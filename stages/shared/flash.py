@@ -76,6 +76,8 @@ def check_flash(inp) -> tuple[float, float, float] | None:
             raise UserError(f"the flash temperature needs the rubber's {name.replace('_', ' ')}", key=f"friction.{name}")
     if inp["friction.background"] != "none" and inp["friction.sliding_distance"] is None:
         raise UserError("background heating needs the sliding distance", key="friction.sliding_distance")
+    if inp["friction.background"] == "none" and "background_temperature_rise" in inp.wanted:
+        raise UserError("background_temperature_rise needs a background heating model", key="friction.background")
     lam, rho_c = values["thermal_conductivity"], values["density"] * values["heat_capacity"]
     return lam, lam / rho_c, float(np.sqrt(lam * rho_c))
 
@@ -146,8 +148,6 @@ def compute_flash(inp, q, C, v, p, mod, nu, thermal, n_phi, n_seg, correction, g
     names = ["friction_coefficient", "sliding_contact_area_ratio", "flash_temperature", "background_temperature_rise",
              "flash_temperature_profile", "frictional_heating"]
     result = dict(zip(names, outputs))
-    if background == "none" and "background_temperature_rise" in inp.wanted:
-        raise UserError("background_temperature_rise needs a background heating model", key="friction.background")
     return {name: value for name, value in result.items()
             if name in ("friction_coefficient", "sliding_contact_area_ratio") or name in inp.wanted}
 

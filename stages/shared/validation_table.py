@@ -21,7 +21,7 @@ from roughcontact.physics.validation import case_pressures, case_spectra, deviat
 from roughcontact.physics.validation import observed_order
 from roughcontact.stage import StageInput, Var
 
-from .shared import e_star
+from .material import e_star
 from .variants import theory_variants, variant_attrs
 
 #: the ranges of the deviation table: (name, what, lower and upper BEM A/A0)

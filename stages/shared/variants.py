@@ -13,7 +13,7 @@ import numpy as np
 
 from roughcontact.physics.corrections import DEFAULT_GAMMA, VARIANTS, variant_theory
 
-from .shared import CORRECTION_KEYS, area_correction
+from .magnification import CORRECTION_KEYS, area_correction
 
 #: the scene keys the variants read (a stage that calls :func:`theory_variants` lists them)
 VARIANT_KEYS = (*CORRECTION_KEYS, "separation.alpha", "numerics.separation_panels_per_decade",
