@@ -133,6 +133,34 @@ def elastic_modulus(omega, E):
     return np.full(np.shape(omega), E), np.zeros(np.shape(omega))
 
 
+def loss_modulus_from_tan_delta(storage, tan_delta):
+    """Loss modulus from the storage modulus and the loss tangent (Pa).
+
+    .. math:: E'' = E' \\tan\\delta,
+
+    the definition of the loss tangent, tan delta = E''/E' (the phase lag of strain behind
+    stress in harmonic loading). Measured master curves and DMA sweeps often give tan delta
+    instead of E''.
+
+    Parameters
+    ----------
+    storage : array
+        Storage modulus E' (Pa).
+    tan_delta : array
+        Loss tangent tan delta (dimensionless), shape of ``storage``.
+
+    Returns
+    -------
+    E'' : array (Pa).
+
+    References
+    ----------
+    docs/theory.md, section "Viscoelasticity"; Ferry, Viscoelastic Properties of Polymers, 3rd
+    ed. (1980), ch. 1; Tschoegl (1989), ch. 4.
+    """
+    return np.asarray(storage, dtype=float) * np.asarray(tan_delta, dtype=float)
+
+
 def wlf_log10_shift(T, T_ref, C1, C2):
     """WLF horizontal shift factor (dimensionless, log10).
 

@@ -19,10 +19,7 @@ The package has three layers (docs/architecture.md):
   only through the registry of :mod:`roughcontact.stage`.
 """
 
-try:  # written by setuptools-scm when the package is built (pip install), from git
-    from ._version import __version__
-except ImportError:  # pragma: no cover - a source tree that was never built
-    __version__ = "0+unbuilt"
+from .version import __version__  # the modules import it from there too (no cycle through this file)
 
 #: the Python API, re-exported from roughcontact.api on first use
 API = ("load_scene", "plan", "run", "open_result", "builtin_scenes", "Results")

@@ -29,7 +29,8 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from . import __version__, engine, scene as scenes, store
+from . import engine, scene as scenes, store
+from .version import __version__
 from .errors import UserError
 from .progress import SILENT, Reporter
 from .scene import PRESETS, Scene

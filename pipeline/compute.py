@@ -87,7 +87,7 @@ def scheduler(setting: str) -> Iterator[object]:
 
 def _worker_version() -> str:
     """Run on each worker: the roughcontact version it can import (stages included)."""
-    from roughcontact import __version__
+    from roughcontact.version import __version__
     from roughcontact.stage import stages
 
     stages()
@@ -95,7 +95,7 @@ def _worker_version() -> str:
 
 
 def _check_workers(client, address: str) -> None:
-    from . import __version__
+    from .version import __version__
 
     try:
         versions = client.run(_worker_version)

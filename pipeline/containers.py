@@ -23,6 +23,9 @@ from pathlib import Path
 import numpy as np
 
 from .errors import UserError
+from .surfaces import Topography
+from .units import array_to_si
+
 
 @dataclass
 class Container:
@@ -35,7 +38,7 @@ class Container:
     surface
         The surface's name in the container.
     measurements
-        One :class:`roughcontact.readers.Topography` per measurement (heights and sizes in m,
+        One :class:`roughcontact.surfaces.Topography` per measurement (heights and sizes in m,
         the container's metadata pipeline applied); its ``metadata`` holds ``measurement``
         (name), ``datafile``, ``detrend_mode``, ``reliability_cutoff_m`` (None if the metadata
         gives no instrument parameters) and ``reliability_cutoff_source``.
@@ -94,11 +97,8 @@ def _cutoff(topo, factor: float):
 
 
 def _measurement(container, index: int, name: str, datafile: str, members: set, path: Path, key: str):
-    """One measurement read and checked, as a :class:`roughcontact.readers.Topography` in metres."""
+    """One measurement read and checked, as a :class:`roughcontact.surfaces.Topography` in metres."""
     from SurfaceTopography.Exceptions import CannotDetectFileFormat, UnknownFileFormat
-
-    from .readers import Topography
-    from .units import array_to_si
 
     where = f"measurement {name!r} (data file {datafile!r})"
     if datafile not in members:

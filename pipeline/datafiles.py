@@ -15,19 +15,20 @@ import numpy as np
 import xarray as xr
 
 from .errors import UserError
+from .units import array_to_si
 
 
-def column_to_si(raw, unit: str, target: str, *, path, scene_key: str, origin: str | None, what: str) -> np.ndarray:
+def column_to_si(raw, unit: str, target: str, *, path, scene_key: str, origin: str | None, what: str,
+                 convert=None) -> np.ndarray:
     """``raw`` given in ``unit`` as an array in the SI ``target`` units.
 
     ``origin`` None: the unit is the scene's ``scene_key``, errors name that key; else it is
     where the file gives the unit (``"line 1"``, ``"q.units"``), errors name the file and it.
-    ``what`` names the column in the message ("column q").
+    ``what`` names the column in the message ("column q"). ``convert(raw, unit, target, key=)``
+    converts (default :func:`roughcontact.units.array_to_si`, multiplicative units only).
     """
-    from .units import array_to_si
-
     try:
-        return array_to_si(raw, unit, target, key=scene_key)
+        return (convert or array_to_si)(raw, unit, target, key=scene_key)
     except UserError as exc:
         if origin is None:
             raise

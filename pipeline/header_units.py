@@ -3,7 +3,7 @@ the scene's ``height_unit`` (in that order).
 
 Text line scans and xyz files often say their units only in a header line such as
 ``# x [um]  h [um]`` or ``x (mm), z (nm)``, which SurfaceTopography does not read: here the header
-is read with the one table reader (:func:`roughcontact.readers.read_table`) so that such a file
+is read with the one table reader (:func:`roughcontact.tables.read_table`) so that such a file
 needs no ``height_unit``. The last column is the height; the first the lateral position.
 """
 
@@ -14,6 +14,8 @@ from pathlib import Path
 import numpy as np
 
 from .errors import UserError
+from .tables import read_table
+from .units import array_to_si
 
 #: suffixes of files that may be text tables with a header
 TEXT_SUFFIXES = (".txt", ".csv", ".dat", ".asc", ".xyz", ".tsv", "")
@@ -22,8 +24,6 @@ TEXT_SUFFIXES = (".txt", ".csv", ".dat", ".asc", ".xyz", ".tsv", "")
 def header_units(path: Path) -> tuple[str | None, str | None]:
     """(lateral unit, height unit) from a text file's column header; (None, None) when the file
     is not a text table or its header gives no units."""
-    from .readers import read_table
-
     if Path(path).suffix.lower() not in TEXT_SUFFIXES:
         return None, None
     try:
@@ -41,8 +41,6 @@ def length_units(path: Path, file_unit: str | None, height_unit: str | None, key
 
     The file's own unit applies to heights and sizes; a header's to its columns (lateral: the
     first, heights: the last); the scene's ``key.height_unit`` to both. Errors name the key."""
-    from .units import array_to_si
-
     def to_m(unit: str, where: str) -> float:
         return float(array_to_si(np.array(1.0), unit, "m", key=where))
 

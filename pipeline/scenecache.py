@@ -20,7 +20,7 @@ import pickle
 from pathlib import Path
 from typing import Callable
 
-from . import __version__
+from .version import __version__
 
 #: parsed scenes kept (the most recent ones)
 KEEP = 200

@@ -29,6 +29,7 @@ from roughcontact.physics.viscoelastic import (
     box_spectrum_modulus,
     elastic_modulus,
     frequency_grid,
+    loss_modulus_from_tan_delta,
     master_curve_at,
     prony_modulus,
     shift_factors,
@@ -327,7 +328,8 @@ def _master_curve_options(params) -> dict:
     """Reader options of a measured master curve (kind file), from the [modulus] section."""
     spec = params["modulus"]
     return dict(key="modulus", columns=spec["columns"], frequency_unit=spec["frequency_unit"],
-                modulus_unit=spec["modulus_unit"], loss_column=spec["loss_column"], frequency=spec["frequency"])
+                modulus_unit=spec["modulus_unit"], loss_column=spec["loss_column"], frequency=spec["frequency"],
+                loss_from_tan_delta=loss_modulus_from_tan_delta)
 
 
 register(

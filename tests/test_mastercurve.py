@@ -197,6 +197,7 @@ GOOD = ["# T [degC]  f [Hz]  E' [MPa]  E'' [MPa]", "0 0.1 10 1", "0 1 12 1.5", "
     (GOOD[:3] + ["0 10 15 -2"] + GOOD[4:], "loss modulus E'' must be >= 0", "line 4"),
     (["# T  f  E'  E''"] + GOOD[1:], "unit of the temperature column unknown", None),
     (GOOD[:3] + ["0 nan 15 2"] + GOOD[4:], "frequency is NaN", "line 4"),
+    (["# T [m]  f [Hz]  E' [MPa]  E'' [MPa]"] + GOOD[1:], "the file gives the temperature the unit 'm'", "line 1"),
 ])
 def test_bad_dma_files_give_one_line_naming_file_and_line(tmp_path, capsys, lines, message, line):
     path = tmp_path / "bad.txt"
@@ -212,3 +213,23 @@ def test_bad_dma_files_give_one_line_naming_file_and_line(tmp_path, capsys, line
     assert str(path) in err and message in err
     assert line is None or f":{line}:" in err
     assert not (tmp_path / "out").exists() or not any((tmp_path / "out").rglob("*.nc"))
+
+
+def test_dma_and_master_curve_tables_read_tan_delta_through_the_stages_kernel(tmp_path):
+    """The one moduli reader: tan delta becomes E'' = E' tan delta through the function the stage
+    passes (physics), the same in a DMA file and a master curve; without it the reader refuses."""
+    from roughcontact.readers import READERS
+
+    rows = [line.split() for line in GOOD[1:]]
+    tan = [f"{r[0]} {r[1]} {r[2]} {float(r[3]) / float(r[2]):.17g}" for r in rows]
+    dma = tmp_path / "tan.txt"
+    dma.write_text("# T [degC]  f [Hz]  E' [MPa]  tan delta\n" + "\n".join(tan) + "\n")
+    curve = tmp_path / "curve.txt"
+    curve.write_text("# f [Hz]  E' [MPa]  tan delta\n" + "\n".join(" ".join(t.split()[1:]) for t in tan[:3]) + "\n")
+    kernel = ve.loss_modulus_from_tan_delta
+    sweeps = READERS["dma"](dma, loss_column="tan_delta", loss_from_tan_delta=kernel)
+    master = READERS["master_curve"](curve, loss_column="tan_delta", loss_from_tan_delta=kernel)
+    np.testing.assert_allclose(np.sort(sweeps.loss), np.sort([float(r[3]) * 1e6 for r in rows]), rtol=1e-12)
+    np.testing.assert_array_equal(master.loss, sweeps.loss[:3])
+    with pytest.raises(TypeError, match="loss_from_tan_delta"):
+        READERS["dma"](dma, loss_column="tan_delta")

@@ -16,7 +16,7 @@ import numpy as np
 import xarray as xr
 
 from roughcontact.physics.mastercurve import build_master_curve, fit_prony, kramers_kronig_deviation, relaxation_times
-from roughcontact.physics.viscoelastic import prony_modulus
+from roughcontact.physics.viscoelastic import loss_modulus_from_tan_delta, prony_modulus
 from roughcontact.stage import Param, Var
 
 #: keys of ``[modulus] kind = "dma"``
@@ -151,4 +151,4 @@ def dma_options(params) -> dict:
     return dict(key="modulus", columns=spec["columns"], temperature_unit=spec["temperature_unit"],
                 frequency_unit=spec["frequency_unit"], modulus_unit=spec["modulus_unit"],
                 loss_column=spec["loss_column"], frequency=spec["frequency"],
-                temperature_tolerance=spec["temperature_tolerance"])
+                temperature_tolerance=spec["temperature_tolerance"], loss_from_tan_delta=loss_modulus_from_tan_delta)

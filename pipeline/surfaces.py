@@ -1,0 +1,164 @@
+"""Measured surfaces: :class:`Topography` (a height map or line scan in metres, as the readers
+hand it to the stages) and :func:`read_topography`, which reads one in any of the instrument
+formats of the SurfaceTopography package (x3p, sdf, sur, opd, plu, datx, Gwyddion, Bruker/DI,
+text matrices, npy, NetCDF, ...). The measurements of a contact.engineering container
+(:mod:`roughcontact.containers`) are Topography objects too.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .errors import UserError
+from .header_units import length_units
+
+
+@dataclass
+class Topography:
+    """A measured surface as read from an instrument file.
+
+    Attributes
+    ----------
+    path
+        The file.
+    heights
+        Heights (m), ``(nx,)`` for a line scan or ``(nx, ny)`` for a map, x first (the layout
+        of SurfaceTopography). Missing points (masked in the file) are NaN.
+    physical_sizes
+        Lengths of the scan along x (and y) (m); None when the file does not give them.
+    periodic
+        Whether the file says the data are periodic (simulations; measurements never are).
+    unit
+        The length unit the heights were given in (e.g. ``"um"``): the file's, or the scene's
+        ``height_unit`` for a file that does not say.
+    format, channel
+        The reader (format) that recognised the file and the channel read (the default one).
+    metadata
+        The file's metadata (instrument, date, ...), as JSON-able values.
+    unit_source
+        Where ``unit`` comes from: ``"file"``, ``"header"`` (a text file's column header) or ``"scene"``.
+    """
+
+    path: Path
+    heights: np.ndarray
+    physical_sizes: tuple[float, ...] | None
+    periodic: bool
+    unit: str | None
+    format: str
+    channel: str
+    metadata: dict = field(default_factory=dict)
+    unit_source: str = "file"
+
+    @property
+    def dim(self) -> int:
+        return self.heights.ndim
+
+
+def _npy_complete(path: Path) -> None:
+    """SurfaceTopography pads a truncated .npy file with zeros; refuse it here instead."""
+    try:
+        np.load(path, mmap_mode="r", allow_pickle=False)  # maps the data: fails if the file is shorter
+    except (ValueError, OSError, EOFError) as exc:
+        raise UserError(f"truncated or corrupt .npy file ({str(exc)[:120]})", file=str(path)) from None
+
+
+def _jsonable(value):
+    if isinstance(value, dict):
+        return {str(k): _jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, (str, int, float, bool)) or value is None:
+        return value
+    if isinstance(value, np.generic):
+        return value.item()
+    return str(value)
+
+
+def _explain_by_suffix(path: Path) -> None:
+    """When format detection failed for a file whose suffix names a format, open it with that
+    format's reader and raise its error as "corrupt or truncated" (detection alone only says
+    that no reader recognised the file)."""
+    from SurfaceTopography import open_topography
+    from SurfaceTopography.IO import readers
+
+    suffix = path.suffix.lower().lstrip(".")
+    formats = [r.format() for r in readers if suffix in r.file_extensions()]
+    for fmt in formats[:1]:
+        try:
+            open_topography(str(path), format=fmt).topography()
+        except Exception as exc:  # noqa: BLE001 - any reader error means the file is damaged
+            raise UserError(f"corrupt or truncated {fmt} file ({exc.__class__.__name__}: {str(exc)[:160]})",
+                            file=str(path)) from None
+
+
+def read_topography(path: Path, *, key: str = "surface", height_unit: str | None = None) -> Topography:
+    """Read a height map or line scan with SurfaceTopography (default channel).
+
+    Heights and sizes are converted to metres with the file's unit, or, for a file that does
+    not say its unit (npy, bare text), with ``height_unit`` from the scene section ``key``
+    (errors name ``key.height_unit``). Errors (unknown format, corrupt or truncated file,
+    non-uniform data, no unit) are :class:`UserError` naming the file.
+    """
+    path = Path(path)
+    try:
+        from SurfaceTopography import open_topography
+        from SurfaceTopography.Exceptions import CannotDetectFileFormat, ReadFileError, UnknownFileFormat
+    except ImportError as exc:
+        raise UserError(
+            f"reading topography files needs the SurfaceTopography package ({exc}); "
+            "install it with: pip install 'roughcontact[topography]'", file=str(path)) from None
+    if not path.is_file():
+        raise UserError("file does not exist", file=str(path))
+    if path.stat().st_size == 0:
+        raise UserError("empty file", file=str(path))
+    if path.suffix.lower() == ".npy":
+        _npy_complete(path)
+    try:
+        reader = open_topography(str(path))
+        channel = reader.default_channel
+        sizes = channel.physical_sizes
+        unit = channel.unit
+        kwargs = {}
+        if sizes is None or any(s is None for s in np.atleast_1d(sizes)):
+            kwargs["physical_sizes"] = tuple(float(n) for n in channel.nb_grid_pts)  # pixels; the scene gives sizes
+            sizes = None
+        if unit is None:
+            kwargs["unit"] = "m"  # placeholder; heights are kept as raw numbers (unit None below)
+        topo = reader.topography(channel_index=channel.index, **kwargs)
+        if not getattr(topo, "is_uniform", True):
+            raise UserError("non-uniformly sampled line scans are not supported; resample them on a uniform grid",
+                            file=str(path))
+        heights = topo.heights()
+        info = _jsonable(dict(getattr(topo, "info", {}) or {}))
+        periodic = bool(topo.is_periodic)
+    except UserError:
+        raise
+    except (CannotDetectFileFormat, UnknownFileFormat) as exc:
+        _explain_by_suffix(path)  # a damaged file of a known format: say what its reader found
+        tried = ", ".join(re.findall(r"tried (\w+)Reader", str(exc))) or "all readers"
+        raise UserError(f"unknown or unsupported topography format (SurfaceTopography tried {tried})",
+                        file=str(path)) from None
+    except ReadFileError as exc:
+        raise UserError(f"corrupt or truncated file ({exc.__class__.__name__}: {str(exc)[:160]})", file=str(path)) from None
+    except Exception as exc:  # readers of binary formats raise all sorts of errors on damaged files
+        raise UserError(f"cannot read the topography ({exc.__class__.__name__}: {str(exc)[:160]})", file=str(path)) from None
+    if np.ma.isMaskedArray(heights):
+        heights = heights.astype(float).filled(np.nan)
+    else:
+        heights = np.array(heights, dtype=float)  # own copy (readers may hand out memory maps)
+    if heights.size == 0:
+        raise UserError("the file holds no height data", file=str(path))
+    sizes_out = tuple(float(s) for s in np.atleast_1d(sizes)) if sizes is not None else None
+    # the file's unit, else a text header's ("# x [um]  h [nm]"), else the scene's
+    unit, source, factor, size_factor = length_units(path, unit, height_unit, key)
+    heights *= factor
+    sizes_out = tuple(s * size_factor for s in sizes_out) if sizes_out is not None else None
+    return Topography(
+        path=path, heights=heights, physical_sizes=sizes_out, periodic=periodic, unit=unit,
+        format=type(reader).__name__.removesuffix("Reader"), channel=str(getattr(channel, "name", channel.index)),
+        metadata=info, unit_source=source,
+    )
