@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
+
 def window_lags(w, threshold=1e-4, max_lag=6):
     """Squared correlations between the periodogram values of modes ``delta`` apart.
 

@@ -21,7 +21,12 @@ from .bem import SubPixelContact, contact_pair
 from .quadrature import log_grid
 from .spectra import hrms_from_psd, psd_combined, rms_slope_from_psd, self_affine_hrms_factor, self_affine_psd
 from .synthesis import (
-    cell_psd_on_lattice, half_plane_weights, lattice_wavenumbers, psd_on_lattice, synthesize_pair, white_noise_pair,
+    cell_psd_on_lattice,
+    half_plane_weights,
+    lattice_wavenumbers,
+    psd_on_lattice,
+    synthesize_pair,
+    white_noise_pair,
 )
 
 #: fields of a BEM task's result, in order along its last axis

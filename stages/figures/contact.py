@@ -7,8 +7,22 @@ import numpy as np
 
 from roughcontact.stage import UserError
 
-from .common import (at_zeta, band_level, band_note, band_on, curve_cases, legend_outside, line_style, line_with_band,
-                     nominal, pick_zeta, q_reference, reduce_dims, selected_etas, zeta_text)
+from .common import (
+    at_zeta,
+    band_level,
+    band_note,
+    band_on,
+    curve_cases,
+    legend_outside,
+    line_style,
+    line_with_band,
+    nominal,
+    pick_zeta,
+    q_reference,
+    reduce_dims,
+    selected_etas,
+    zeta_text,
+)
 
 
 def _colour_map(ax, ds, E_star):

@@ -4,8 +4,6 @@ field uses: Hyun et al., Phys. Rev. E 70, 026117 (2004); Prodanov, Dapp & Müser
 
 from __future__ import annotations
 
-import numpy as np
-
 from .common import eta_label, style
 
 #: line style of each theory variant (colour and marker are the eta case's, as in every figure)
