@@ -60,7 +60,7 @@ def case_spectra(hurst, zeta, qL, rolloffs, hrms, points_per_decade=50):
     knots = [r * qL for r in rolloffs]
     q = log_grid(qL, q1, points_per_decade, knots=knots)
     out = [q]
-    for r, h in zip(rolloffs, hrms):
+    for r, h in zip(rolloffs, hrms, strict=True):
         q0 = r * qL
         C0 = h * h / self_affine_hrms_factor(hurst, qL, q0, q1)
         out.append(self_affine_psd(q, hurst, qL, q0, q1, C0))
