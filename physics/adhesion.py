@@ -80,7 +80,10 @@ def adhesion_length(delta_gamma, E_star):
 def surface_area_factor(xi):
     """Surface-area enhancement F, seed eq 11 (dimensionless).
 
-    .. math:: F = \\int_0^\\infty (1 + \\xi^2 x)^{1/2} e^{-x} dx = 1 + \\frac{\\sqrt{\\pi}\\, \\xi}{2} \\mathrm{erfcx}(1/\\xi)
+    .. math::
+
+        F = \\int_0^\\infty (1 + \\xi^2 x)^{1/2} e^{-x} dx
+          = 1 + \\frac{\\sqrt{\\pi}\\, \\xi}{2} \\mathrm{erfcx}(1/\\xi)
 
     F(0) = 1, F ~ (sqrt(pi)/2) xi for large xi.
 

@@ -20,8 +20,8 @@ import math
 
 import numpy as np
 
-from .spectra import extend_psd, isotropic_factor
 from .lattice import area_lattice, bincount, profile_lattice
+from .spectra import extend_psd, isotropic_factor
 from .synthesis import half_plane_weights, lattice_wavenumbers
 
 # ----------------------------------------------------------------------------------------

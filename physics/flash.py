@@ -78,7 +78,8 @@ def passage_average(x):
     x = np.asarray(x, dtype=float)
     small = x < 0.05
     xs = np.clip(np.where(small, 1.0, x), 0.05, 1e12)  # Theta = 1 - 1/(2x) to rounding beyond 1e12
-    series = 2.0 / np.sqrt(np.pi) * np.sqrt(np.where(small, x, 0.0)) * np.polyval(_SERIES[::-1], np.where(small, x, 0.0))
+    series = (2.0 / np.sqrt(np.pi) * np.sqrt(np.where(small, x, 0.0))
+              * np.polyval(_SERIES[::-1], np.where(small, x, 0.0)))
     with np.errstate(under="ignore"):
         closed = ((xs - 0.5) * erf(np.sqrt(xs)) + np.sqrt(xs / np.pi) * np.exp(-xs)) / xs
     return np.where(small, series, closed)

@@ -249,8 +249,8 @@ def friction_kernel(q, C, A, B, sigma0, nu, correction="none", gamma=0.5, extras
         P = contact_fraction(G, area_correction, area_gamma)
         return P * area_factor(P, correction, gamma)
 
-    I, G = running_weighted_integral(q, g, r, weight, nodes=segment_nodes)
-    mu = 4.0 / k * I
+    integral, G = running_weighted_integral(q, g, r, weight, nodes=segment_nodes)
+    mu = 4.0 / k * integral
     P = contact_fraction(G, area_correction, area_gamma)
     area = P[..., -1]
     if extras:

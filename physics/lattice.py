@@ -13,7 +13,8 @@ from .synthesis import half_plane_weights
 
 def bincount(idx, weights, nbins):
     """Sums of ``weights`` (counts if None) per bin index 0 .. nbins of ``idx`` (any shape)."""
-    return np.bincount(idx.ravel(), weights=None if weights is None else weights.ravel(), minlength=nbins + 1)[: nbins + 1]
+    counts = np.bincount(idx.ravel(), weights=None if weights is None else weights.ravel(), minlength=nbins + 1)
+    return counts[: nbins + 1]
 
 
 def area_lattice(nx, ny, sx, sy, edges, q_max):

@@ -343,7 +343,7 @@ def leakage_kernel(q, C, p, *, E_star, alpha, refinement="none", numerics=None, 
     out = [np.full(shape, np.nan) for _ in range(4)]
     kw = dict(E_star=E_star, alpha=alpha, refinement=refinement, numerics=numerics)
     for idx in np.ndindex(C.shape[:-1]):
-        sel = tuple(i if n > 1 else slice(None) for i, n in zip(idx, C.shape[:-1]))
+        sel = tuple(i if n > 1 else slice(None) for i, n in zip(idx, C.shape[:-1], strict=True))
         ps = p[sel]
         flat = ps.ravel()
         qs, Cs = (q, C[idx]) if q_top is None or q_top >= q[-1] else band_grid(q, C[idx], q[0], q_top)

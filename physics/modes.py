@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
+
 def window_lags(w, threshold=1e-4, max_lag=6):
     """Squared correlations between the periodogram values of modes ``delta`` apart.
 
@@ -45,7 +46,8 @@ def window_lags(w, threshold=1e-4, max_lag=6):
     for axis, n in enumerate(w2.shape):  # DFT at the small lags only, one axis at a time
         k = min(max_lag, n // 2)
         phase = 2.0 * np.pi * np.outer(np.arange(n), d[max_lag - k:max_lag + k + 1]) / n
-        rho = np.moveaxis(np.tensordot(np.moveaxis(rho, axis, -1), np.cos(phase) - 1j * np.sin(phase), axes=1), -1, axis)
+        rho = np.moveaxis(np.tensordot(np.moveaxis(rho, axis, -1), np.cos(phase) - 1j * np.sin(phase), axes=1),
+                          -1, axis)
     rho2 = np.abs(rho) ** 2 / np.sum(w2) ** 2
     index = np.argwhere(rho2 > threshold)
     lags = index - np.array([min(max_lag, n // 2) for n in w2.shape])
@@ -104,7 +106,7 @@ def window_mode_factor_area(nx, ny, sx, sy, edges, q_max, w, box=192):
     nb = edges.size - 1
     m = np.bincount(b[b >= 0], minlength=nb).astype(float)
     S = m.copy()
-    for (dx, dy), r2 in zip(lags, rho2):
+    for (dx, dy), r2 in zip(lags, rho2, strict=True):
         if whole:
             a, c = b, np.roll(b, (-dx, -dy), axis=(0, 1))
         else:

@@ -95,7 +95,8 @@ def segment_integrals_pairs(xa, xb, ya, yb):
     L = np.log(xb / xa)
     positive = (ya > 0) & (yb > 0)
     with np.errstate(divide="ignore", invalid="ignore"):
-        s = np.where(positive & (L > 0), np.log(np.where(positive, yb, 1.0) / np.where(positive, ya, 1.0)) / np.where(L > 0, L, 1.0), 0.0)
+        s = np.where(positive & (L > 0),
+                     np.log(np.where(positive, yb, 1.0) / np.where(positive, ya, 1.0)) / np.where(L > 0, L, 1.0), 0.0)
         power = ya * xa * L * _exprel((s + 1.0) * L)
     trapezoid = 0.5 * (ya + yb) * (xb - xa)
     return np.where(positive, power, trapezoid)
@@ -129,7 +130,8 @@ def _log_pieces(lo: float, hi: float, points_per_decade: int, knots=()):
     if points_per_decade < 1:
         raise ValueError("points_per_decade must be >= 1")
     edges = np.unique(np.concatenate([[lo, hi], [k for k in knots if lo < k < hi]]))
-    counts = [max(1, int(np.ceil(np.log10(b / a) * points_per_decade - 1e-9))) for a, b in zip(edges[:-1], edges[1:])]
+    counts = [max(1, int(np.ceil(np.log10(b / a) * points_per_decade - 1e-9)))
+              for a, b in zip(edges[:-1], edges[1:], strict=True)]
     return edges, counts
 
 
@@ -146,7 +148,7 @@ def log_grid(lo: float, hi: float, points_per_decade: int, knots=()) -> np.ndarr
     requested one. Exact power-law quadrature then needs no node to straddle a kink.
     """
     edges, counts = _log_pieces(lo, hi, points_per_decade, knots)
-    pieces = [np.geomspace(a, b, n + 1)[:-1] for a, b, n in zip(edges[:-1], edges[1:], counts)]
+    pieces = [np.geomspace(a, b, n + 1)[:-1] for a, b, n in zip(edges[:-1], edges[1:], counts, strict=True)]
     pieces.append([hi])
     return np.concatenate(pieces)
 
@@ -229,7 +231,8 @@ def inverse_cumulative_integral(x, y, level):
         k1 = np.log(np.where(positive, yb, 1.0) / np.where(positive, ya, 1.0)) / np.log(xb / xa) + 1.0
         r = dI / np.where(positive, ya * xa, 1.0)
         t = k1 * r
-        logratio = np.where(np.abs(t) < 1e-8, r * (1.0 - 0.5 * t), np.log1p(np.maximum(t, -1.0 + 1e-300)) / np.where(k1 == 0, 1.0, k1))
+        logratio = np.where(np.abs(t) < 1e-8, r * (1.0 - 0.5 * t),
+                            np.log1p(np.maximum(t, -1.0 + 1e-300)) / np.where(k1 == 0, 1.0, k1))
         x_power = xa * np.exp(logratio)
         # straight line y = ya + m (x - xa): dI = ya d + m d^2 / 2
         m = (yb - ya) / (xb - xa)

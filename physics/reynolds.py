@@ -75,7 +75,7 @@ def percolates(open_cells, axis):
     bottom = np.take(label, [0], axis=axis).ravel()[wrap]
     winding: dict[int, int] = {}
     links: dict[int, list[tuple[int, int]]] = {}
-    for a, b in zip(top.tolist(), bottom.tolist()):
+    for a, b in zip(top.tolist(), bottom.tolist(), strict=True):
         links.setdefault(a, []).append((b, 1))
         links.setdefault(b, []).append((a, -1))
     for start in links:

@@ -118,7 +118,8 @@ def grid_weights(q_grid, q, how):
     if how == "power_law":
         k = min(3, x.size - 1)
         below, above = lx < x[0], lx > x[-1]
-        a, b = np.where(below, 0, np.where(above, x.size - 1 - k, a)), np.where(below, k, np.where(above, x.size - 1, b))
+        a, b = (np.where(below, 0, np.where(above, x.size - 1 - k, a)),
+                np.where(below, k, np.where(above, x.size - 1, b)))
         inside = np.ones_like(inside)
     t = (lx - x[a]) / (x[b] - x[a])
     return a, b, t, inside
@@ -301,7 +302,8 @@ def coherence_draws_on_grid(draws, q_grid, q, eta, err, seed, stream):
         sz = np.where(np.abs(eta) < 1.0, err / (1.0 - eta * eta), 0.0)
     out = np.empty((flat.size, q_grid.size))
     for i, d in enumerate(flat):
-        e = eta if d == 0 else np.tanh(z + sz * np.random.default_rng([int(seed), int(stream), int(d)]).standard_normal(z.size))
+        e = eta if d == 0 else np.tanh(
+            z + sz * np.random.default_rng([int(seed), int(stream), int(d)]).standard_normal(z.size))
         out[i] = coherence_on_grid(q_grid, q, np.where(np.isfinite(e), e, eta))
     return out.reshape(np.shape(draws) + (q_grid.size,))
 

@@ -21,7 +21,12 @@ from .bem import SubPixelContact, contact_pair
 from .quadrature import log_grid
 from .spectra import hrms_from_psd, psd_combined, rms_slope_from_psd, self_affine_hrms_factor, self_affine_psd
 from .synthesis import (
-    cell_psd_on_lattice, half_plane_weights, lattice_wavenumbers, psd_on_lattice, synthesize_pair, white_noise_pair,
+    cell_psd_on_lattice,
+    half_plane_weights,
+    lattice_wavenumbers,
+    psd_on_lattice,
+    synthesize_pair,
+    white_noise_pair,
 )
 
 #: fields of a BEM task's result, in order along its last axis
@@ -55,7 +60,7 @@ def case_spectra(hurst, zeta, qL, rolloffs, hrms, points_per_decade=50):
     knots = [r * qL for r in rolloffs]
     q = log_grid(qL, q1, points_per_decade, knots=knots)
     out = [q]
-    for r, h in zip(rolloffs, hrms):
+    for r, h in zip(rolloffs, hrms, strict=True):
         q0 = r * qL
         C0 = h * h / self_affine_hrms_factor(hurst, qL, q0, q1)
         out.append(self_affine_psd(q, hurst, qL, q0, q1, C0))

@@ -26,18 +26,21 @@ def _parser() -> argparse.ArgumentParser:
 
     def scene_command(name, help_text):
         p = sub.add_parser(name, help=help_text)
-        p.add_argument("scene", nargs="?", help="scene file or built-in scene name (default: the built-in default scene)")
+        p.add_argument("scene", nargs="?",
+                       help="scene file or built-in scene name (default: the built-in default scene)")
         p.add_argument("--outdir", type=Path, help="where results go (default: outputs/<scene name>)")
         p.add_argument("--preset", choices=("fast", "default", "accurate"),
                        help="resolution preset for every setting the scene does not set itself")
         return p
 
     run = scene_command("run", "compute what the scene asks for, reusing up-to-date results")
-    run.add_argument("--force", action="append", default=[], metavar="STAGE", help="recompute STAGE even if fresh ('all': every stage)")
+    run.add_argument("--force", action="append", default=[], metavar="STAGE",
+                     help="recompute STAGE even if fresh ('all': every stage)")
     run.add_argument("--quiet", action="store_true", help="no progress bars: one line per stage")
     run.add_argument("--scheduler", help="threads (default), processes, synchronous, or a dask.distributed "
                                          "scheduler address tcp://host:port (overrides [run] scheduler)")
-    plan = scene_command("plan", "say for each stage whether it is fresh, stale (and why) or missing; exit 1 if anything would run")
+    plan = scene_command("plan", "say for each stage whether it is fresh, stale (and why) or missing; "
+                                 "exit 1 if anything would run")
     for p in (run, plan):
         p.add_argument("--verify", action="store_true", default=None,
                        help="check the checksum of every reused result (default: of results up to 64 MiB)")
@@ -142,7 +145,8 @@ def scene_figures(sc) -> tuple[list, list]:
     for an optional output they need."""
     needed = {st.name for st in engine.needed_stages(sc, sc.outputs)}
     figures = [f for st in stages().values() for f in st.figures if set(f.stages) <= needed]
-    return [f for f in figures if set(f.outputs) <= set(sc.outputs)], [f for f in figures if not set(f.outputs) <= set(sc.outputs)]
+    asked = set(sc.outputs)
+    return [f for f in figures if set(f.outputs) <= asked], [f for f in figures if not set(f.outputs) <= asked]
 
 
 def _plot(sc, outdir: Path, reporter, scheduler=None) -> int:
@@ -195,7 +199,8 @@ def _show(path: Path) -> int:
             units = v.attrs.get("units", "?")
             value = f" = {display(v.values.item(), units)}" if v.ndim == 0 and v.dtype.kind == "f" else ""
             print(f"  {name:24s} ({', '.join(v.dims)}) [{units}] {v.attrs.get('long_name', '')}{value}")
-        for label, attr in (("parameters", "parameters"), ("upstream", "upstream_keys"), ("input files", "input_files")):
+        for label, attr in (("parameters", "parameters"), ("upstream", "upstream_keys"),
+                            ("input files", "input_files")):
             if attr in a:
                 try:
                     value = json.loads(a[attr])

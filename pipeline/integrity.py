@@ -88,7 +88,8 @@ class Checksums:
 
     def known(self) -> dict[str, tuple[tuple[int, ...], int]]:
         """Block shape and block sum of each variable hashed while written (waits for the hashing)."""
-        out = {name: (self.blocks[name], sum(self._wait(f) for f in futures) % 2**256) for name, futures in self.pending.items()}
+        out = {name: (self.blocks[name], sum(self._wait(f) for f in futures) % 2**256)
+               for name, futures in self.pending.items()}
         if self.pool is not None:
             self.pool.shutdown()
         return out
@@ -113,8 +114,10 @@ def _variable_sum(var, name: str, block) -> int:
     """The block sum of a variable read from an open netCDF4 file on the grid of ``block``."""
     shape = tuple(var.shape)
     total = 0
-    for start in itertools.product(*(range(0, n, b) for n, b in zip(shape, block))):
-        region = tuple(slice(s, s + b) for s, b in zip(start, block))
+    # a block of another rank than the variable (a damaged checksum attribute) raises ValueError,
+    # which damage() reports as damage
+    for start in itertools.product(*(range(0, n, b) for n, b in zip(shape, block, strict=True))):
+        region = tuple(slice(s, s + b) for s, b in zip(start, block, strict=True))
         with ncio.locked():
             values = np.asarray(var[region] if region else var[...])
         total = (total + block_digest(name, values, start)) % 2**256

@@ -224,7 +224,8 @@ def _from_dict(raw: dict, path: Path | None, variant: str) -> Scene:
             if not isinstance(value, str):
                 raise UserError(f"expected a string, got {value!r}", key=key)
         elif key not in schema:
-            raise UserError(f"unknown key {key!r}{did_you_mean(key, list(schema) + list(TOP_LEVEL) + ['variants'])}", key=key)
+            known = list(schema) + list(TOP_LEVEL) + ["variants"]
+            raise UserError(f"unknown key {key!r}{did_you_mean(key, known)}", key=key)
     numerics = raw.get("numerics") if isinstance(raw.get("numerics"), dict) else None
     chunks = _chunks(numerics.pop("chunks", {}) if numerics is not None else {})
     chunk_mb = numerics.pop("chunk_mb", 32.0) if numerics is not None else 32.0
@@ -331,7 +332,8 @@ def reference() -> str:
                     default = f"`{shown}`"
                 choices = f" ({', '.join(map(str, p.choices))})" if p.choices else ""
                 if p.presets:
-                    choices += " [presets: " + ", ".join(f"{k} {v}" for k, v in {**p.presets, "default": p.default}.items()) + "]"
+                    presets = {**p.presets, "default": p.default}
+                    choices += " [presets: " + ", ".join(f"{k} {v}" for k, v in presets.items()) + "]"
                 lines.append(f"| `{p.name}` | {p.kind} | {p.units or '-'} | {default} | {prefix}{p.doc}{choices} |")
         lines.append("")
     return "\n".join(lines)

@@ -102,65 +102,10 @@ class Param:
     # -- validation ---------------------------------------------------------------------
     def convert(self, raw: Any, key: str, base_dir: Path | None):
         """Validate and convert ``raw`` (as read from TOML) to its SI value."""
-        k = self.kind
-        if k == "quantity":
-            return self._bounded(to_si(raw, self.units, key=key, difference=self.difference), key)
-        if k in ("sweep", "quantities"):
-            if isinstance(raw, str) and raw in self.choices:
-                return raw
-            values = parse_sweep(raw, self.units, key, difference=self.difference)
-            for v in np.atleast_1d(values):
-                self._bounded(float(v), key)
-            # a sweep becomes a coordinate, which CF wants strictly monotonic: increasing, whatever
-            # order the scene lists it in (results do not depend on the order)
-            return np.sort(values) if k == "sweep" and isinstance(values, np.ndarray) else values
-        if k == "int":
-            if isinstance(raw, bool) or not isinstance(raw, int):
-                raise UserError(f"expected a whole number, got {raw!r}", key=key)
-            return int(self._bounded(raw, key))
-        if k == "bool":
-            if not isinstance(raw, bool):
-                raise UserError(f"expected true or false, got {raw!r}", key=key)
-            return raw
-        if k in ("str", "choice"):
-            if not isinstance(raw, str):
-                raise UserError(f"expected a string, got {raw!r}", key=key)
-            if k == "choice" and raw not in self.choices:
-                raise UserError(f"{raw!r} is not one of {', '.join(map(repr, self.choices))}{_did_you_mean(raw, self.choices)}", key=key)
-            return raw
-        if k == "list":
-            if isinstance(raw, str):
-                raw = [raw]
-            if not isinstance(raw, list) or not all(isinstance(x, str) for x in raw):
-                raise UserError(f"expected a list of strings, got {raw!r}", key=key)
-            return tuple(raw)
-        if k == "intlist":
-            if not isinstance(raw, list) or not all(isinstance(x, int) and not isinstance(x, bool) for x in raw):
-                raise UserError(f"expected a list of whole numbers, got {raw!r}", key=key)
-            for x in raw:
-                self._bounded(x, key)
-            return tuple(raw)
-        if k == "table":
-            if not isinstance(raw, dict) or not all(isinstance(v, (int, float, str)) and not isinstance(v, bool)
-                                                    for v in raw.values()):
-                raise UserError(f"expected a table of names to numbers or strings, e.g. {{ eta = 0.0 }}, got {raw!r}", key=key)
-            return dict(raw)
-        if k == "paths":
-            items = [raw] if isinstance(raw, str) else raw
-            if not isinstance(items, list) or not items or not all(isinstance(x, str) for x in items):
-                raise UserError(f"expected a file path or a non-empty list of them, got {raw!r}", key=key)
-            single = Param(self.name, "path")
-            return tuple(single.convert(x, f"{key}[{i}]" if len(items) > 1 else key, base_dir) for i, x in enumerate(items))
-        if k == "path":
-            if not isinstance(raw, str):
-                raise UserError(f"expected a file path, got {raw!r}", key=key)
-            path = Path(raw).expanduser()
-            if not path.is_absolute() and base_dir is not None:
-                path = base_dir / path
-            if not path.is_file():
-                raise UserError(f"file {str(path)!r} does not exist", key=key)
-            return path.resolve()
-        raise AssertionError(k)
+        converter = _CONVERTERS.get(self.kind)
+        if converter is None:
+            raise AssertionError(self.kind)
+        return converter(self, raw, key, base_dir)
 
     def _bounded(self, v: float, key: str) -> float:
         if isinstance(v, float) and not math.isfinite(v):
@@ -171,6 +116,95 @@ class Param:
         if self.hi is not None and (v >= self.hi if self.hi_open else v > self.hi):
             raise UserError(f"must be {'<' if self.hi_open else '<='} {self.hi:g}{u}, got {v:g}{u}", key=key)
         return v
+
+
+# -- one converter per parameter kind (Param.convert dispatches on ``kind``) -----------------
+def _quantity(p: Param, raw: Any, key: str, base_dir: Path | None) -> float:
+    return p._bounded(to_si(raw, p.units, key=key, difference=p.difference), key)
+
+
+def _sweep(p: Param, raw: Any, key: str, base_dir: Path | None):
+    """``sweep`` and ``quantities``: a quantity or a list / range of them, or one of ``choices``."""
+    if isinstance(raw, str) and raw in p.choices:
+        return raw
+    values = parse_sweep(raw, p.units, key, difference=p.difference)
+    for v in np.atleast_1d(values):
+        p._bounded(float(v), key)
+    # a sweep becomes a coordinate, which CF wants strictly monotonic: increasing, whatever
+    # order the scene lists it in (results do not depend on the order)
+    return np.sort(values) if p.kind == "sweep" and isinstance(values, np.ndarray) else values
+
+
+def _int(p: Param, raw: Any, key: str, base_dir: Path | None) -> int:
+    if isinstance(raw, bool) or not isinstance(raw, int):
+        raise UserError(f"expected a whole number, got {raw!r}", key=key)
+    return int(p._bounded(raw, key))
+
+
+def _bool(p: Param, raw: Any, key: str, base_dir: Path | None) -> bool:
+    if not isinstance(raw, bool):
+        raise UserError(f"expected true or false, got {raw!r}", key=key)
+    return raw
+
+
+def _str(p: Param, raw: Any, key: str, base_dir: Path | None) -> str:
+    """``str`` and ``choice`` (one of ``choices``)."""
+    if not isinstance(raw, str):
+        raise UserError(f"expected a string, got {raw!r}", key=key)
+    if p.kind == "choice" and raw not in p.choices:
+        raise UserError(f"{raw!r} is not one of {', '.join(map(repr, p.choices))}{_did_you_mean(raw, p.choices)}",
+                        key=key)
+    return raw
+
+
+def _list(p: Param, raw: Any, key: str, base_dir: Path | None) -> tuple[str, ...]:
+    if isinstance(raw, str):
+        raw = [raw]
+    if not isinstance(raw, list) or not all(isinstance(x, str) for x in raw):
+        raise UserError(f"expected a list of strings, got {raw!r}", key=key)
+    return tuple(raw)
+
+
+def _intlist(p: Param, raw: Any, key: str, base_dir: Path | None) -> tuple[int, ...]:
+    if not isinstance(raw, list) or not all(isinstance(x, int) and not isinstance(x, bool) for x in raw):
+        raise UserError(f"expected a list of whole numbers, got {raw!r}", key=key)
+    for x in raw:
+        p._bounded(x, key)
+    return tuple(raw)
+
+
+def _table(p: Param, raw: Any, key: str, base_dir: Path | None) -> dict:
+    if not isinstance(raw, dict) or not all(isinstance(v, (int, float, str)) and not isinstance(v, bool)
+                                            for v in raw.values()):
+        raise UserError(f"expected a table of names to numbers or strings, e.g. {{ eta = 0.0 }}, got {raw!r}",
+                        key=key)
+    return dict(raw)
+
+
+def _paths(p: Param, raw: Any, key: str, base_dir: Path | None) -> tuple[Path, ...]:
+    items = [raw] if isinstance(raw, str) else raw
+    if not isinstance(items, list) or not items or not all(isinstance(x, str) for x in items):
+        raise UserError(f"expected a file path or a non-empty list of them, got {raw!r}", key=key)
+    single = Param(p.name, "path")
+    return tuple(single.convert(x, f"{key}[{i}]" if len(items) > 1 else key, base_dir) for i, x in enumerate(items))
+
+
+def _path(p: Param, raw: Any, key: str, base_dir: Path | None) -> Path:
+    if not isinstance(raw, str):
+        raise UserError(f"expected a file path, got {raw!r}", key=key)
+    path = Path(raw).expanduser()
+    if not path.is_absolute() and base_dir is not None:
+        path = base_dir / path
+    if not path.is_file():
+        raise UserError(f"file {str(path)!r} does not exist", key=key)
+    return path.resolve()
+
+
+_CONVERTERS: dict[str, Callable[[Param, Any, str, Path | None], Any]] = {
+    "quantity": _quantity, "sweep": _sweep, "quantities": _sweep, "int": _int, "bool": _bool, "str": _str,
+    "choice": _str, "path": _path, "paths": _paths, "list": _list, "intlist": _intlist, "table": _table,
+}
+assert set(_CONVERTERS) == set(KINDS)
 
 
 def parse_sweep(raw: Any, units: str, key: str, *, difference: bool = False):
@@ -261,17 +295,7 @@ class Section:
             raw = {}
         if not isinstance(raw, dict):
             raise UserError(f"expected a table [{key}], got {raw!r}", key=key)
-        kind = None
-        if self.discriminator is not None:
-            if self.discriminator not in raw:
-                raise UserError(f"needs '{self.discriminator}' (one of {', '.join(map(repr, self.variants))})", key=key)
-            kind = raw[self.discriminator]
-            if kind not in self.variants:
-                raise UserError(
-                    f"{self.discriminator} = {kind!r} is not one of {', '.join(map(repr, self.variants))}"
-                    f"{_did_you_mean(str(kind), self.variants)}",
-                    key=f"{key}.{self.discriminator}",
-                )
+        kind = self._variant(raw, key)
         params = {p.name: p for p in self.params_for(kind)}
         out: dict[str, Any] = {}
         if kind is not None:
@@ -292,6 +316,21 @@ class Section:
         if self.check is not None and not missing:
             self.check(out, key)
         return out
+
+    def _variant(self, raw: dict, key: str) -> str | None:
+        """The value of the discriminator key (which variant's parameters apply); None without one."""
+        if self.discriminator is None:
+            return None
+        if self.discriminator not in raw:
+            raise UserError(f"needs '{self.discriminator}' (one of {', '.join(map(repr, self.variants))})", key=key)
+        kind = raw[self.discriminator]
+        if kind not in self.variants:
+            raise UserError(
+                f"{self.discriminator} = {kind!r} is not one of {', '.join(map(repr, self.variants))}"
+                f"{_did_you_mean(str(kind), self.variants)}",
+                key=f"{key}.{self.discriminator}",
+            )
+        return kind
 
 
 def _did_you_mean(word: str, options) -> str:

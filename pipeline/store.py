@@ -145,7 +145,8 @@ def write(ds: xr.Dataset, path: Path, compute_with="threads", progress=None, com
     Dask-backed variables are computed block by block by ``compute_with`` (a dask scheduler
     name or a distributed Client) and written from this process (:func:`pipeline.compute.write_blocks`),
     so a result never has to fit in memory (``progress``: a :class:`roughcontact.progress.Reporter`
-    showing the blocks written; ``compress``: large variables zlib-compressed, :mod:`roughcontact.cf`). A crash or kill while writing leaves at most a
+    showing the blocks written; ``compress``: large variables zlib-compressed, :mod:`roughcontact.cf`).
+    A crash or kill while writing leaves at most a
     ``.tmp-*`` file, which is never read as a result (and is removed by :func:`clean_temporaries`).
     The file gets a checksum of its data and attributes (:mod:`roughcontact.integrity`). A file
     that cannot be written (full disk, no permission) is an :class:`OutputError` naming it, raised

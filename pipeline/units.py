@@ -9,10 +9,14 @@ from __future__ import annotations
 
 import functools
 import re
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .errors import UserError
+
+if TYPE_CHECKING:  # for the annotations only: pint is imported when a quantity is parsed
+    import pint
 
 _NUMBER = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(.*?)\s*$")
 
@@ -159,7 +163,9 @@ def display(value, units: str | None) -> str:
     long lists by their ends and length, anything else as JSON would show it."""
     if isinstance(value, (list, tuple)):
         items = [display(v, units) for v in value]
-        return "[" + ", ".join(items) + "]" if len(items) <= 4 else f"[{items[0]}, {items[1]}, ..., {items[-1]}] ({len(items)} values)"
+        if len(items) <= 4:
+            return "[" + ", ".join(items) + "]"
+        return f"[{items[0]}, {items[1]}, ..., {items[-1]}] ({len(items)} values)"
     if isinstance(value, (int, float, np.number)) and not isinstance(value, bool) and units is not None:
         return readable(float(value), units)
     return repr(value) if isinstance(value, str) else str(value).lower() if isinstance(value, bool) else str(value)

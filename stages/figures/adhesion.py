@@ -7,8 +7,19 @@ import numpy as np
 
 from roughcontact.stage import UserError
 
-from .common import (DEFAULT_LEVEL, band_level, band_note, draw_band, eta_label, legend_outside, line_style, nominal,
-                     q_reference, style, wavenumber)
+from .common import (
+    DEFAULT_LEVEL,
+    band_level,
+    band_note,
+    draw_band,
+    eta_label,
+    legend_outside,
+    line_style,
+    nominal,
+    q_reference,
+    style,
+    wavenumber,
+)
 
 _ANGSTROM = 1e-10
 

@@ -123,9 +123,10 @@ def figure_band_stress(results):
     for i in picks:
         d, b = nominal.isel(p=i), band.isel(p=i)
         sigma = d["sigma"].values / 1e6
-        line, = ax.plot(sigma, d.values * 1e6, lw=1.4, label=f"p = {float(d['p']) / 1e6:.3g} MPa (A/A0 = {float(area[i]):.2f})")
-        ax.fill_between(sigma, b.isel(quantile=0).values * 1e6, b.isel(quantile=-1).values * 1e6, color=line.get_color(),
-                        alpha=0.25, lw=0)
+        line, = ax.plot(sigma, d.values * 1e6, lw=1.4,
+                        label=f"p = {float(d['p']) / 1e6:.3g} MPa (A/A0 = {float(area[i]):.2f})")
+        ax.fill_between(sigma, b.isel(quantile=0).values * 1e6, b.isel(quantile=-1).values * 1e6,
+                        color=line.get_color(), alpha=0.25, lw=0)
     ax.set_xlim(left=0)
     ax.set_ylim(bottom=0)
     ax.set_xlabel("local stress sigma (MPa)")
@@ -152,10 +153,11 @@ def figure_band_psd(results):
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(8.4, 4.6), layout="constrained")
-    for label, case, q, C, lo, hi, notes in _series(results, "psd", "psd_combined", "q"):
+    for label, case, q, C, lo, hi, _notes in _series(results, "psd", "psd_combined", "q"):
         ok = C > 0
         s = style(case)
-        line, = ax.loglog(q[ok], C[ok], color=s["color"], linestyle=s["linestyle"], lw=1.2, label=f"combined C(q), {label}")
+        line, = ax.loglog(q[ok], C[ok], color=s["color"], linestyle=s["linestyle"], lw=1.2,
+                          label=f"combined C(q), {label}")
         ax.fill_between(q[ok], lo[ok], hi[ok], color=line.get_color(), alpha=0.25, lw=0)
     topo = results["base"].get("topography")
     for name, colour in (("substrate", "0.35"), ("solid", "0.65")):

@@ -151,7 +151,7 @@ def figure_bem_reduced_pressure(results):
         ax.set_ylabel(f"{what}: theory / BEM")
         ax.grid(alpha=0.3)
         ax.set_ylim(0, max(1.5, min(ax.get_ylim()[1], 3.0)))
-    fig.suptitle(f"Theory / BEM against the reduced pressure, at zeta = {float(results['base']['bem']['bem_zeta']):.4g}",
-                 fontsize=10)
+    zeta = float(results["base"]["bem"]["bem_zeta"])
+    fig.suptitle(f"Theory / BEM against the reduced pressure, at zeta = {zeta:.4g}", fontsize=10)
     _legend(fig, cases, variants, bem=False)
     return fig

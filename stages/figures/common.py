@@ -154,7 +154,7 @@ def legend_outside(fig, axes=None, below: bool = False):
     right of them, or ``below`` them for a figure of several panels under one title; each label once."""
     handles, labels = [], []
     for ax in axes if axes is not None else fig.axes:
-        for h, label in zip(*ax.get_legend_handles_labels()):
+        for h, label in zip(*ax.get_legend_handles_labels(), strict=True):
             if label not in labels and not label.startswith("_"):
                 handles.append(h)
                 labels.append(label)
@@ -192,7 +192,7 @@ def draw_band(da, level: float):
 def band_on(x0, xs, ys, level: float):
     """Quantiles over draws 1..N of curves (xs[d], ys[d]) read at the abscissae ``x0`` (each
     draw has its own abscissae, e.g. an adaptive stress grid)."""
-    curves = np.stack([np.interp(x0, x, y, left=0.0, right=0.0) for x, y in zip(xs[1:], ys[1:])], axis=-1)
+    curves = np.stack([np.interp(x0, x, y, left=0.0, right=0.0) for x, y in zip(xs[1:], ys[1:], strict=True)], axis=-1)
     q = quantiles(curves, [(1.0 - level) / 2.0, (1.0 + level) / 2.0])
     return q[..., 0], q[..., 1]
 

@@ -7,8 +7,22 @@ import numpy as np
 
 from roughcontact.stage import UserError
 
-from .common import (at_zeta, band_level, band_note, band_on, curve_cases, legend_outside, line_style, line_with_band,
-                     nominal, pick_zeta, q_reference, reduce_dims, selected_etas, zeta_text)
+from .common import (
+    at_zeta,
+    band_level,
+    band_note,
+    band_on,
+    curve_cases,
+    legend_outside,
+    line_style,
+    line_with_band,
+    nominal,
+    pick_zeta,
+    q_reference,
+    reduce_dims,
+    selected_etas,
+    zeta_text,
+)
 
 
 def _colour_map(ax, ds, E_star):
@@ -50,7 +64,8 @@ def figure_contact_area(results):
                     float(nominal(base["E_star"])))
         ax.set_title("the seed's cases (nearest coherences)", fontsize=9)
     extra = "; ".join(sorted(n for n in notes if n))
-    title = f"Relative contact area (seed Fig. 3) at\n{zeta_text(zeta, q_reference(results))}" + (f"\n{extra}" if extra else "")
+    title = (f"Relative contact area (seed Fig. 3) at\n{zeta_text(zeta, q_reference(results))}"
+             + (f"\n{extra}" if extra else ""))
     if many:
         fig.suptitle(title, fontsize=10)
     else:
@@ -78,7 +93,7 @@ def figure_stress_distribution(results):
     E_star = float(nominal(base["E_star"]))
     picks, level = _pressures(cases[0].ds, zeta), band_level(results)
     fig, axes = plt.subplots(1, len(picks), figsize=(3.6 * len(picks) + 2.2, 3.8), squeeze=False, layout="constrained")
-    for ax, p in zip(axes[0], picks):
+    for ax, p in zip(axes[0], picks, strict=True):
         right = 0.0
         for case in cases:
             ds = reduce_dims(at_zeta(case.ds, zeta), ("p", "stress_level"), "stress_distribution")[0]

@@ -6,8 +6,18 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from .common import (band_level, band_note, draw_band, eta_label, legend_outside, line_style, line_with_band, nominal,
-                     q_reference, wavenumber)
+from .common import (
+    band_level,
+    band_note,
+    draw_band,
+    eta_label,
+    legend_outside,
+    line_style,
+    line_with_band,
+    nominal,
+    q_reference,
+    wavenumber,
+)
 
 
 def _first(da: xr.DataArray, keep: tuple[str, ...]) -> tuple[xr.DataArray, str]:

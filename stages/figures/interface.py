@@ -53,7 +53,7 @@ def figure_conductance(results):
              (("thermal_contact_conductance", "thermal contact conductance h", "W/(m^2 K)"),
               ("electrical_contact_conductance", "electrical contact conductance", "S/m^2")) if name in base]
     fig, axes = plt.subplots(1, len(kinds), figsize=(5.6 * len(kinds), 4.3), squeeze=False)
-    for ax, (name, title, unit) in zip(axes[0], kinds):
+    for ax, (name, title, unit) in zip(axes[0], kinds, strict=True):
         for k, (label, ds) in enumerate(curve_cases(results, "conductance")):
             y = _top_zeta(ds[name]).values
             p = ds["p"].values / 1e6

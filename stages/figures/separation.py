@@ -5,8 +5,20 @@ from __future__ import annotations
 
 import numpy as np
 
-from .common import (at_zeta, band_level, band_note, curve_cases, legend_outside, line_style, line_with_band, nominal,
-                     pick_zeta, q_reference, reduce_dims, zeta_text)
+from .common import (
+    at_zeta,
+    band_level,
+    band_note,
+    curve_cases,
+    legend_outside,
+    line_style,
+    line_with_band,
+    nominal,
+    pick_zeta,
+    q_reference,
+    reduce_dims,
+    zeta_text,
+)
 
 
 def figure_separation(results):

@@ -4,8 +4,6 @@ field uses: Hyun et al., Phys. Rev. E 70, 026117 (2004); Prodanov, Dapp & Müser
 
 from __future__ import annotations
 
-import numpy as np
-
 from .common import eta_label, style
 
 #: line style of each theory variant (colour and marker are the eta case's, as in every figure)
@@ -55,9 +53,10 @@ def figure_kappa(results):
         for name in d["theory"].values:
             t = d["validation_kappa_theory"].sel(theory=name).isel(bandwidth=0, eta=0)
             top.semilogx(x, t, _LINES.get(str(name), "-."), color="0.2", linewidth=1.6)
-        for b, e, label, case, face in _cases(d):
+        for b, e, _label, case, face in _cases(d):
             dd = d.isel(bandwidth=b, eta=e)
-            k, err = dd["validation_kappa_bem"].values, (dd["validation_bem_area_error"] / dd["reduced_pressure"]).values
+            k = dd["validation_kappa_bem"].values
+            err = (dd["validation_bem_area_error"] / dd["reduced_pressure"]).values
             top.errorbar(x, k, yerr=err, fmt=case["marker"], color=case["color"], markerfacecolor=face, markersize=4,
                          capsize=2, linestyle="none")
             for name in d["theory"].values:
@@ -91,7 +90,7 @@ def figure_separation_ratio(results):
     x = ds["reduced_pressure"].values
     for c, h in enumerate(H):
         d, ax = ds.isel(hurst=c), axes[0, c]
-        for b, e, label, case, face in _cases(d):
+        for b, e, _label, case, face in _cases(d):
             dd = d.isel(bandwidth=b, eta=e)
             inside = (dd["validation_bem_area"] > 0.01).values
             for name in d["theory"].values:
