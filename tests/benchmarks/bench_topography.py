@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from _bench import SMOKE, positional  # noqa: E402  (and tests/ on the path, for _synthetic)
+from _bench import SMOKE, positional  # noqa: E402
 
 REPEAT = 2
 _CACHE = f"/tmp/bench_topography_{os.getpid()}_h{{}}.npy"  # one pair per run: two runs may overlap
@@ -26,7 +26,7 @@ _L = 1e-4
 
 
 def _maps(n):
-    from _synthetic import self_affine, synthesize
+    from roughcontact.scenes.data.synthetic import self_affine, synthesize
 
     rng = np.random.default_rng(0)
     L = _L

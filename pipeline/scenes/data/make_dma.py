@@ -1,6 +1,6 @@
 """Write the example DMA file of the built-in `dma_flash` scene (seeded: reproducible).
 
-    python tests/make_example_dma.py
+    python -m roughcontact.scenes.data.make_dma
 
 Synthetic frequency sweeps of a tread-like model rubber, not a measurement: a log-normal
 relaxation spectrum (relaxed modulus 5 MPa, glassy modulus about 2 GPa, centred at tau = 1 ms at
@@ -19,7 +19,7 @@ import numpy as np
 
 from roughcontact.physics.viscoelastic import prony_modulus, wlf_log10_shift
 
-OUT = Path(__file__).resolve().parent.parent / "pipeline" / "scenes" / "data" / "dma_example.txt"
+OUT = Path(__file__).resolve().parent / "dma_example.txt"  # next to this maker
 C1, C2, T_REF = 12.0, 70.0, 253.15
 TAU = np.logspace(-12, 5, 52)
 STRENGTH = 2e9 / 52 * 3.0 * np.exp(-0.5 * ((np.log10(TAU) + 3.0) / 3.0) ** 2)
@@ -30,7 +30,7 @@ def main() -> None:
     rng = np.random.default_rng(20261123)
     temps = np.concatenate([np.arange(-35.0, 1.0, 5.0), np.arange(10.0, 61.0, 10.0)])
     freqs = np.logspace(-1, 2, 13)
-    rows = ["# Synthetic DMA frequency sweeps (tests/make_example_dma.py): log-normal spectrum, WLF C1 = 12,",
+    rows = ["# Synthetic DMA frequency sweeps (roughcontact.scenes.data.make_dma): log-normal spectrum, WLF C1 = 12,",
             "# C2 = 70 K about -20 degC, 1 % noise. Columns: temperature, frequency, E', E''.",
             "# T [degC]  f [Hz]  E' [MPa]  E'' [MPa]"]
     for T in temps:
