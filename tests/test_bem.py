@@ -36,6 +36,8 @@ from roughcontact.stages.bem import EXTRA, solve_pair
 from roughcontact.stages.figures.bem import figure_bem_comparison
 from roughcontact.stages.shared.maps import map_band
 
+from reference_solutions import westergaard_contact_fraction, westergaard_full_contact_pressure
+
 # a self-affine PSD in reduced units: qL = 1 (map side 2 pi), roll-off at 4, cut-off 100
 Q = np.geomspace(1.0, 100.0, 201)
 C_SHAPE = self_affine_psd(Q, 0.8, 1.0, 4.0, 100.0, 1.0)
@@ -189,7 +191,7 @@ def test_sinusoid_full_contact_pressure():
     pytest.importorskip("tamaas")
     h0, lam, E_star = 2e-9, 1e-6, 3e9
     nx = 256
-    p_star = np.pi * E_star * h0 / lam
+    p_star = westergaard_full_contact_pressure(h0, lam, E_star)
     res = solve_contact(sinusoid(nx, 4, h0), lam / nx, E_star, [0.99 * p_star, 1.01 * p_star], tolerance=1e-12)
     assert res["area"][0] < 1.0 and res["mean_gap"][0] > 0
     assert res["area"][1] == 1.0 and res["mean_gap"][1] < 1e-9 * h0
@@ -201,9 +203,9 @@ def test_westergaard_contact_width(ratio):
     (2/pi) arcsin(sqrt(p/p*)); to 1e-2 on a 512-pixel period."""
     pytest.importorskip("tamaas")
     nx, h0, E_star = 512, 1e-8, 1e9
-    p_star = np.pi * E_star * h0 / 1e-6
+    p_star = westergaard_full_contact_pressure(h0, 1e-6, E_star)
     res = solve_contact(sinusoid(nx, 4, h0), 1e-6 / nx, E_star, [ratio * p_star], tolerance=1e-12)
-    expected = 2 / np.pi * np.arcsin(np.sqrt(ratio))
+    expected = westergaard_contact_fraction(ratio)
     assert res["area"][0] == pytest.approx(expected, rel=1e-2)
 
 

@@ -5,22 +5,19 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 from scipy import integrate
-from scipy.special import erf
 
 from roughcontact.physics.contact import contact_area_ratio, effective_modulus, stress_distribution
 
 from conftest import SURFACE, make_scene
+from reference_solutions import contact_area_ratio as area_eq19, self_affine_C0, self_affine_G
 
 E, NU = 77.2e9, 0.42
 E_STAR = E / (1 - NU**2)
 
 
 def _analytic_G(zeta, hrms, H=0.8, qL=2e8, q1=4e10):
-    """G for the seed's eq 63 PSD (q0 = qL), written from the closed form of the integral."""
-    C0 = hrms**2 / (np.pi * qL**2 * (1 - (qL / q1) ** (2 * H)) / H)
-    # int_qL^{zeta qL} q^3 C0 (q/qL)^(-2-2H) dq
-    integral = C0 * qL ** (2 + 2 * H) * ((zeta * qL) ** (2 - 2 * H) - qL ** (2 - 2 * H)) / (2 - 2 * H)
-    return np.pi / 4 * E_STAR**2 * integral
+    """G for the seed's eq 63 PSD (q0 = qL), from the closed form of the integral."""
+    return self_affine_G(zeta, self_affine_C0(hrms, H, qL, qL, q1), H, qL, E_STAR)
 
 
 def test_area_equals_eq19_with_independent_G(run_scene):
@@ -29,7 +26,7 @@ def test_area_equals_eq19_with_independent_G(run_scene):
         G = _analytic_G(zeta, 1e-9)
         assert float(res["G"].sel(zeta=zeta)) == pytest.approx(G, rel=1e-10)
         p = res["p"].values
-        assert np.allclose(res["contact_area_ratio"].sel(zeta=zeta).values, erf(p / (2 * np.sqrt(G))), rtol=1e-10)
+        assert np.allclose(res["contact_area_ratio"].sel(zeta=zeta).values, area_eq19(p, G), rtol=1e-10)
 
 
 def test_area_tends_to_eq20_at_small_load():

@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 
 sys.path.insert(0, str(Path(__file__).parent))
-from _synthetic import self_affine, synthesize, wavevectors  # noqa: E402
-from make_example_container import write_container  # noqa: E402
+from roughcontact.scenes.data.synthetic import self_affine, synthesize, wavevectors
+from roughcontact.scenes.data.make_container import write_container
 
 from roughcontact import engine, scene  # noqa: E402
 from roughcontact.errors import UserError  # noqa: E402

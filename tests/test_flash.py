@@ -26,6 +26,7 @@ from roughcontact.physics.quadrature import integral, log_grid
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from test_friction import _scene  # noqa: E402
+from reference_solutions import self_affine_C0  # noqa: E402
 
 QUIET = engine.Reporter(None)
 RUBBER = dict(conductivity=0.25, diffusivity=0.25 / (1200.0 * 1500.0))  # W/(m K), m^2/s: typical filled rubber
@@ -37,7 +38,7 @@ def _psd(ppd=40, decades=4):
     q1 = q[-1]
 
     def one(h, H):
-        C0 = h * h * H / (math.pi * 1e8 * (1 - (1e4 / q1) ** (2 * H)))
+        C0 = self_affine_C0(h, H, 1e4, 1e4, q1)
         return C0 * (q / 1e4) ** (-2 * (1 + H))
 
     return q, one(2.7e-6, 0.93) + one(6e-6, 0.87)

@@ -7,14 +7,11 @@ independent brute-force evaluation of eqs 61-62 by scipy.
 
 from __future__ import annotations
 
-import cmath
-import math
 
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from scipy.integrate import quad, solve_ivp
 from scipy.special import erf
 
 from roughcontact import engine, scene as scenes
@@ -25,6 +22,8 @@ from roughcontact.physics.contact import persson_G
 from roughcontact.physics import friction as physics_friction
 from roughcontact.physics import viscoelastic as ve
 from roughcontact.physics.quadrature import log_grid
+
+from reference_solutions import brute_force_mu
 
 QUIET = engine.Reporter(None)
 
@@ -141,45 +140,7 @@ def test_builtin_has_one_broad_maximum(builtin):
 # ----------------------------------------------------------------------------------------
 
 
-def _brute_force_mu(v, spec, psd_specs, sigma0, nu, rtol=1e-10):
-    """mu and A/A0 from eqs 61-62 with no grid at all: quad over phi (adaptive, rtol 1e-11) for
-    the angular integrals of the analytic box modulus, and an adaptive ODE solver (DOP853,
-    rtol 1e-10) for the q integrals of G and mu together, in the variable x = sqrt(ln(q/q0))
-    (dq = 2 x q dx removes the integrable 1/sqrt(q - q0) of P(q) at q0)."""
-    T, T_ref, C1, C2 = spec["T"], spec["T_ref"], spec["C1"], spec["C2"]
-    aT = 10.0 ** (-C1 * (T - T_ref) / (C2 + T - T_ref))
-    E0, Ei, t1, t2 = spec["E0"], spec["E_inf"], spec["tau1"] * aT, spec["tau2"] * aT
-    D = (Ei - E0) / math.log(t2 / t1)
-
-    def E(w):
-        return E0 + D * (cmath.log(1 + 1j * w * t2) - cmath.log(1 + 1j * w * t1))
-
-    q0, q1 = psd_specs[0]["qL"], psd_specs[0]["q1"]
-
-    def C(q):
-        out = 0.0
-        for s in psd_specs:
-            H, h = s["H"], s["hrms"]
-            C0 = h * h * H / (math.pi * q0 * q0 * (1 - (q0 / q1) ** (2 * H)))
-            out += C0 * (q / q0) ** (-2 * (1 + H))
-        return out
-
-    k = 1.0 / ((1 - nu * nu) * sigma0)
-    opts = dict(epsabs=0.0, epsrel=rtol / 10, limit=400)
-
-    def rhs(x, y):
-        q = q0 * math.exp(x * x)
-        jac = 2 * x * q
-        A = quad(lambda p: abs(E(q * v * math.cos(p))) ** 2, 0, math.pi / 2, **opts)[0]
-        B = quad(lambda p: math.cos(p) * E(q * v * math.cos(p)).imag, 0, math.pi / 2, **opts)[0]
-        G = y[0]
-        P = math.erf(1 / (2 * math.sqrt(G))) if G > 0 else 1.0
-        c = q**3 * C(q) * jac
-        return [0.5 * k * k * c * A, 2 * k * c * P * B]
-
-    sol = solve_ivp(rhs, (0.0, math.sqrt(math.log(q1 / q0))), [0.0, 0.0], method="DOP853", rtol=rtol, atol=1e-30)
-    G, mu = sol.y[:, -1]
-    return mu, math.erf(1 / (2 * math.sqrt(G)))
+# brute_force_mu: tests/reference_solutions.py
 
 
 @pytest.mark.parametrize("v", [1e-6, 3e-2, 30.0, 1e3])
@@ -188,7 +149,7 @@ def test_agrees_with_brute_force_scipy(v):
     sc = scenes.load("friction")
     spec = sc.values["modulus"]
     surfaces = [sc.values["substrate"], sc.values["solid"]]
-    mu_bf, area_bf = _brute_force_mu(v, spec, surfaces, sc.values["load"]["p"], sc.values["material"]["nu"])
+    mu_bf, area_bf = brute_force_mu(v, spec, surfaces, sc.values["load"]["p"], sc.values["material"]["nu"])
     fric = _stage_at(sc, v)
     assert fric[0] == pytest.approx(mu_bf, rel=1e-4)
     assert fric[1] == pytest.approx(area_bf, rel=1e-4)

@@ -21,6 +21,7 @@ from roughcontact.physics.quadrature import log_grid
 from roughcontact.physics.separation import mean_separation, separation_nodes
 
 from conftest import make_scene
+from reference_solutions import self_affine_C0, self_affine_psd, self_affine_q3C_integral
 
 H, QL, Q0, Q1 = 0.8, 2e8, 8e8, 4e10
 E_STAR = 77.2e9 / (1 - 0.42**2)
@@ -29,21 +30,16 @@ ALPHA = 0.45
 
 def plateau(hrms):
     """C0 of the self-affine PSD with roll-off from its rms height (exact integral)."""
-    return hrms**2 / (np.pi * (Q0**2 - QL**2 + Q0**2 / H * (1 - (Q0 / Q1) ** (2 * H))))
+    return self_affine_C0(hrms, H, QL, Q0, Q1)
 
 
 def psd(q, C0):
-    q = np.asarray(q, dtype=float)
-    return np.where(q < Q0, C0, C0 * (q / Q0) ** (-2 * (1 + H)))
+    return self_affine_psd(q, C0, H, Q0)
 
 
 def running_q3C(dq, C0):
-    """\\int_qL^(qL + dq) q'^3 C dq' in closed form (the plateau part expanded in dq: no cancellation)."""
-    d = min(dq, Q0 - QL)
-    low = C0 * d * (4 * QL**3 + 6 * QL**2 * d + 4 * QL * d * d + d**3) / 4
-    q = QL + dq
-    high = C0 * Q0 ** (2 + 2 * H) * (max(q, Q0) ** (2 - 2 * H) - Q0 ** (2 - 2 * H)) / (2 - 2 * H)
-    return low + high
+    """\\int_qL^(qL + dq) q'^3 C dq' in closed form (no cancellation as dq -> 0)."""
+    return self_affine_q3C_integral(dq, C0, H, QL, Q0)
 
 
 def separation_by_quad(p, zeta, C0):

@@ -7,7 +7,7 @@ sealing load and positive below it; identical surfaces (eta = 1) seal at any loa
 infinite stiffness, sealing load 0); the contact area at the sealing load is near the 0.42 of
 Dapp et al. (2012); the stiffness of the theory is within 25 % of the BEM's at small load and
 the critical-junction leak rate within a factor of 3 of the exact one away from the threshold.
-The larger comparison (256^2, 4 realizations, the example maps) is tests/bench_interface.py.
+The larger comparison (256^2, 4 realizations, the example maps) is tests/benchmarks/bench_interface.py.
 """
 
 from __future__ import annotations

@@ -13,7 +13,7 @@ import pytest
 from roughcontact import engine, scene as scenes
 from roughcontact.cli import main
 
-from _synthetic import self_affine, synthesize
+from roughcontact.scenes.data.synthetic import self_affine, synthesize
 from conftest import make_scene, toml_dumps
 
 pytest.importorskip("SurfaceTopography")

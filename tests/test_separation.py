@@ -30,6 +30,8 @@ from roughcontact.physics.separation import (
     yang_persson_J,
 )
 
+from reference_solutions import brute_force_u, self_affine_q3C_integral
+
 H, QL, Q1 = 0.8, 2e8, 4e10
 E_STAR = 77.2e9 / (1 - 0.42**2)
 ALPHA = 0.45
@@ -126,8 +128,7 @@ def test_beta_sign_of_eq_60():
     C0 = C[0]
 
     def w(t):  # w at q = qL + t^2 (analytic running integral of the power law)
-        I = C0 * QL**4 * math.expm1((2 - 2 * H) * math.log1p(t * t / QL)) / (2 - 2 * H)
-        return (math.pi * I) ** -0.5
+        return (math.pi * self_affine_q3C_integral(t * t, C0, H, QL)) ** -0.5
 
     def weight(t):  # q = qL + t^2 removes the 1/sqrt singularity
         qq = QL + t * t
@@ -193,36 +194,7 @@ def test_identical_surfaces_give_zero_separation_and_nan_beta():
 # ----------------------------------------------------------------------------------------
 
 
-def brute_force_u(p, zeta, C0, alpha=ALPHA, yang_persson=False, epsrel=1e-11, factor=None):
-    """Eq 57 as written: sqrt(pi) alpha int dq q^2 C w int_p^inf dp'/p' S exp(-(w p'/E*)^2),
-    S = 1 (or alpha -> alpha + 3(1-alpha) erf^2 inside), both integrals by quad; w analytic for
-    the pure power law; q = qL + t^2 so that quad sees no endpoint singularity."""
-
-    def w_of(t):  # w at q = qL + t^2
-        I = C0 * QL**4 * math.expm1((2 - 2 * H) * math.log1p(t * t / QL)) / (2 - 2 * H)
-        return (math.pi * I) ** -0.5 if I > 0 else math.inf
-
-    def inner(w):
-        if not math.isfinite(w):
-            return 0.0
-        def f(lp):
-            x = w * math.exp(lp) / E_STAR
-            if factor is not None:
-                return factor(math.erf(x)) * math.exp(-x * x)
-            weight = alpha + 3 * (1 - alpha) * math.erf(x) ** 2 if yang_persson else alpha
-            return weight * math.exp(-x * x)
-        lo, mid = math.log(p), max(math.log(p), math.log(E_STAR / w)) + 4
-        return (quad(f, lo, mid, epsabs=0, epsrel=epsrel / 10, limit=200)[0]
-                + quad(f, mid, math.inf, epsabs=0, epsrel=epsrel / 10)[0])
-
-    def outer(t):
-        q = QL + t * t
-        w = w_of(t)
-        return 2 * t * q * q * C0 * (q / QL) ** (-2 - 2 * H) * w * inner(w) if math.isfinite(w) else 0.0
-
-    # the E1 switch (w p/E* ~ 1) can sit arbitrarily close to t = 0: split the range geometrically
-    edges = [0.0, *math.sqrt((zeta - 1) * QL) * np.geomspace(1e-12, 1.0, 25)]
-    return math.sqrt(math.pi) * sum(quad(outer, a, b, epsabs=0, epsrel=epsrel, limit=200)[0] for a, b in zip(edges, edges[1:]))
+# brute_force_u: tests/reference_solutions.py
 
 
 @pytest.mark.parametrize("p_rel,zeta", [(1e-9, 4.0), (1e-6, 4.0), (1e-3, 4.0), (3e-2, 20.0)])

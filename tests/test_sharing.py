@@ -33,7 +33,7 @@ def test_a_result_file_has_the_mode_the_umask_gives(tmp_path, umask, mode):
 
 def test_the_default_scene_is_cf_clean_for_compliance_checker(tmp_path):
     pytest.importorskip("compliance_checker")
-    from cf_report import cf_errors, result_files
+    from benchmarks.cf_report import cf_errors, result_files
 
     engine.run(scenes.load("default"), tmp_path / "out", report=engine.Reporter(None))
     files = result_files(tmp_path / "out")
@@ -85,7 +85,7 @@ def test_provenance_names_the_version_and_the_commit(tmp_path):
 @pytest.mark.parametrize("name", sorted(scenes.builtin_scenes()))
 def test_every_builtin_scene_is_cf_clean(tmp_path, name):
     pytest.importorskip("compliance_checker")
-    from cf_report import cf_errors, result_files
+    from benchmarks.cf_report import cf_errors, result_files
 
     sc = scenes.load(name)
     if any(p.stage.name == "bem" for p in engine.plan(sc, tmp_path)):

@@ -17,7 +17,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 sys.path.insert(0, str(Path(__file__).parent))
-from _synthetic import self_affine, synthesize, wavevectors  # noqa: E402
+from roughcontact.scenes.data.synthetic import self_affine, synthesize, wavevectors
 
 from roughcontact import engine, scene  # noqa: E402
 from roughcontact.errors import UserError  # noqa: E402

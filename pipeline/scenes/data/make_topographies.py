@@ -1,6 +1,6 @@
 """Write the example height maps of the built-in `topography` scene (seeded: reproducible).
 
-    python tests/make_example_topographies.py
+    python -m roughcontact.scenes.data.make_topographies
 
 Two periodic 256 x 256 maps of 20 um x 20 um, heights in nm (float32 .npy), with self-affine
 spectra (H = 0.8, roll-off at 2 pi / 4 um) of rms 60 nm (substrate) and 40 nm (solid); the solid is
@@ -10,15 +10,13 @@ substrate is a / sqrt(a^2 + b^2) = 0.6 at every q.
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _synthetic import self_affine, synthesize  # noqa: E402
+from roughcontact.scenes.data.synthetic import self_affine, synthesize
 
-OUT = Path(__file__).resolve().parent.parent / "pipeline" / "scenes" / "data"
+OUT = Path(__file__).resolve().parent  # next to this maker
 N, SIZE, H, Q0 = 256, 20e-6, 0.8, 2 * np.pi / 4e-6
 ETA = 0.6
 

@@ -1,8 +1,9 @@
 """Benchmark: the default scene cold (nothing stored) and warm (everything reused).
 
-    python tests/bench_pipeline.py [--repeat 3]
+    python tests/benchmarks/bench_pipeline.py [--repeat 3] [--smoke]
 
 Prints both times and their ratio, measured in one run; the warm run must recompute nothing.
+--smoke: one repeat (seconds, for CI).
 """
 
 from __future__ import annotations
@@ -19,7 +20,10 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[1])
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--scene", default=None, help="scene file or built-in name (default scene)")
+    ap.add_argument("--smoke", action="store_true", help="one repeat (seconds)")
     args = ap.parse_args()
+    if args.smoke:
+        args.repeat = 1
     sc = scenes.load(args.scene)
     cold, warm = [], []
     for _ in range(args.repeat):

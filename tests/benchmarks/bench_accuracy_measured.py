@@ -3,9 +3,10 @@
 For each points_per_decade, the largest error (docs/accuracy.md's measure, floor 1e-6 of the
 largest value) of A/A0 and u at each magnification, against a run at a much finer grid:
 
-    python tests/bench_accuracy_measured.py [SCENE] [REFERENCE_PPD]
+    python tests/benchmarks/bench_accuracy_measured.py [SCENE] [REFERENCE_PPD] [--smoke]
 
-(defaults: topography, 1600). docs/accuracy.md quotes its output.
+(defaults: topography, 1600). docs/accuracy.md quotes its output. --smoke: reference 100 points
+per decade against 25 (seconds, for CI).
 """
 
 import sys
@@ -13,6 +14,8 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
+
+from _bench import SMOKE, positional
 
 from roughcontact import engine, scene as scenes
 from roughcontact.accuracy import with_settings
@@ -28,11 +31,11 @@ def run(sc, settings):
         return {v: res[s][v].transpose("zeta", ...).values for s, v in (("contact", TARGETS[0]), ("separation", TARGETS[1]))}
 
 
-def main(name="topography", reference=1600):
+def main(name="topography", reference=1600, ppds=(50, 200, 400)):
     sc = scenes.load(name)
     ref = run(sc, {"numerics.points_per_decade": reference})
     print(f"scene {name}; reference {reference} points per decade; zeta = {ZETAS}")
-    for ppd in (50, 200, 400):
+    for ppd in ppds:
         res = run(sc, {"numerics.points_per_decade": ppd})
         for var in TARGETS:
             a, b = res[var].reshape(len(ZETAS), -1), ref[var].reshape(len(ZETAS), -1)
@@ -43,4 +46,9 @@ def main(name="topography", reference=1600):
 
 
 if __name__ == "__main__":
-    main(sys.argv[1] if len(sys.argv) > 1 else "topography", int(sys.argv[2]) if len(sys.argv) > 2 else 1600)
+    args = positional(sys.argv[1:])
+    name = args[0] if args else "topography"
+    if SMOKE:
+        main(name, 100, (25,))
+    else:
+        main(name, int(args[1]) if len(args) > 1 else 1600)

@@ -1,4 +1,5 @@
-"""Synthetic random surfaces for the topography tests and benchmark (Fourier synthesis)."""
+"""Synthetic random surfaces (Fourier synthesis): what the example-data makers of this folder use, and
+the topography tests and benchmark."""
 
 from __future__ import annotations
 

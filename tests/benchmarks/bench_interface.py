@@ -2,11 +2,12 @@
 on synthesized pairs (default 256^2, 4 realizations) and on the two example height maps, with
 a table of theory/exact ratios over p and the comparison figure.
 
-    python tests/bench_interface.py [--grid 256] [--realizations 4] [--outdir DIR] [--figure PNG]
+    python tests/benchmarks/bench_interface.py [--grid 256] [--realizations 4] [--outdir DIR] [--figure PNG] [--smoke]
 
 Prints, per case, a Markdown table: p/E*, the BEM's contact area, the exact leak rate, the
 critical-junction and effective-medium ratios to it, and the stiffness ratio; then the sealing
 loads (theory and BEM) and the contact area at the BEM's sealing load. Wall time per case.
+--smoke: one 32^2 pair, the measured maps left out (seconds, for CI).
 """
 
 from __future__ import annotations
@@ -82,7 +83,10 @@ def main() -> None:
     parser.add_argument("--outdir", type=Path, default=None)
     parser.add_argument("--figure", type=Path, default=None, help="write the synthesized case's figure here")
     parser.add_argument("--skip-measured", action="store_true")
+    parser.add_argument("--smoke", action="store_true", help="one 32^2 pair, no measured maps (seconds)")
     args = parser.parse_args()
+    if args.smoke:
+        args.grid, args.realizations, args.skip_measured = 32, 1, True
     outdir = args.outdir or Path(tempfile.mkdtemp(prefix="bench-interface-"))
     ds, seconds = run(synthesized(args.grid, args.realizations), outdir / "synthesized")
     print(f"## synthesized pairs, {args.grid}^2, {args.realizations} realizations, zeta = {ds.attrs['bem_zeta']:.4g} "

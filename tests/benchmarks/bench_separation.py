@@ -1,6 +1,7 @@
 """Benchmark of the separation stage: cost of u(p) and its error against a converged run.
 
-Run: ``python tests/bench_separation.py`` from the repository root (not collected by pytest).
+Run: ``python tests/benchmarks/bench_separation.py [--smoke]`` from the repository root (not collected
+by pytest). ``--smoke``: 20 pressures, coarse "converged" runs, two settings per table (seconds).
 
 1. Time of u(p) for 200 pressures x 3 eta (seed section 4.2 surfaces, zeta = 4 and 200) at the
    default resolution, through the stage (psd grid given).
@@ -12,17 +13,14 @@ Run: ``python tests/bench_separation.py`` from the repository root (not collecte
 
 from __future__ import annotations
 
-import sys
 import time
-from pathlib import Path
 
 import numpy as np
 from scipy.special import exp1
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from _bench import SMOKE, stage_result  # noqa: E402
 
 from roughcontact.scene import from_dict  # noqa: E402
-from roughcontact.stage import StageInput, stages  # noqa: E402
 from roughcontact.physics.spectra import self_affine_hrms_factor, self_affine_psd  # noqa: E402
 from roughcontact.physics.quadrature import cumulative_integral, log_grid  # noqa: E402
 from roughcontact.physics.separation import mean_separation, separation_nodes  # noqa: E402
@@ -30,7 +28,7 @@ from roughcontact.physics.separation import mean_separation, separation_nodes  #
 H, QL, Q1 = 0.8, 2e8, 4e10
 E_STAR = 77.2e9 / (1 - 0.42**2)
 ALPHA = 0.45
-P = np.geomspace(1e-10, 1e-1, 200) * E_STAR
+P = np.geomspace(1e-10, 1e-1, 200 if not SMOKE else 20) * E_STAR
 ZETA = np.array([4.0, 200.0])
 
 
@@ -45,15 +43,9 @@ def scene(**numerics):
     })
 
 
-def run_stage(name, sc, upstream=None):
-    st = stages()[name]
-    inp = StageInput(params={k: sc.get(k) for k in st.keys}, upstream=upstream or {})
-    return st.compute(inp)
-
-
 def separation_of(sc, psd=None):
-    psd = psd if psd is not None else run_stage("psd", sc)
-    return run_stage("separation", sc, {"psd": psd})["mean_separation"].values
+    psd = psd if psd is not None else stage_result("psd", sc)
+    return stage_result("separation", sc, {"psd": psd})["mean_separation"]
 
 
 def rel_error(u, ref, mask):
@@ -74,32 +66,36 @@ PRESET_SETTINGS = _preset_settings()
 
 def timing():
     sc = scene()
-    psd = run_stage("psd", sc)
+    psd = stage_result("psd", sc)
     separation_of(sc, psd)  # warm up (Yang-Persson table, imports)
     times = []
-    for _ in range(5):
+    for _ in range(5 if not SMOKE else 1):
         t0 = time.perf_counter()
         separation_of(sc, psd)
         times.append(time.perf_counter() - t0)
-    print(f"## time of u(p): 200 pressures x 3 eta x 2 zeta, default resolution (q: 50/decade)")
+    print(f"## time of u(p): {P.size} pressures x 3 eta x 2 zeta, default resolution (q: 50/decade)")
     print(f"best of 5: {min(times) * 1e3:.1f} ms   median: {np.median(times) * 1e3:.1f} ms")
 
 
 def table_scene():
     conv = separation_of(scene(points_per_decade=400, separation_panels_per_decade=16,
-                               separation_gauss_points=10, separation_depth=14.0))
-    mask_eta = np.array([True, False, True])  # eta = +1: u = 0 exactly
+                               separation_gauss_points=10, separation_depth=14.0) if not SMOKE else
+                         scene(points_per_decade=100, separation_panels_per_decade=8, separation_gauss_points=6))
+    # eta = +1: u = 0 exactly. The stage stores eta increasing (-1, 0, 1), not in the scene's order
+    mask_eta = conv["eta"].values != 1.0
+    conv = conv.values
     pmask = P / E_STAR <= 1e-2
     print("\n## error against a converged run (q 400/decade, 16 panels/decade, 10 Gauss points, depth 14)")
     print("seed section 4.2 PSD (piecewise power law), eta = 0 and -1, zeta = 4 and 200, p/E* in [1e-10, 1e-2]")
     print("| q points/decade | panels/decade | Gauss points | max rel. error | time (ms) |")
     print("|---|---|---|---|---|")
-    for ppd, pan, gp in [(10, 4, 4), (20, 1, 2), (25, 4, 4), (50, 1, 2), (50, 2, 2), (50, 2, 3), (50, 4, 3),
-                         (50, 4, 4), (50, 8, 6), (100, 4, 4), (200, 4, 4)]:
+    settings = [(10, 4, 4), (20, 1, 2), (25, 4, 4), (50, 1, 2), (50, 2, 2), (50, 2, 3), (50, 4, 3),
+                (50, 4, 4), (50, 8, 6), (100, 4, 4), (200, 4, 4)]
+    for ppd, pan, gp in settings if not SMOKE else settings[:2]:
         sc = scene(points_per_decade=ppd, separation_panels_per_decade=pan, separation_gauss_points=gp)
-        psd = run_stage("psd", sc)
+        psd = stage_result("psd", sc)
         t0 = time.perf_counter()
-        u = separation_of(sc, psd)
+        u = separation_of(sc, psd).values
         dt = time.perf_counter() - t0
         err = rel_error(u[mask_eta], conv[mask_eta], pmask)
         tag = "".join(f" ({name})" for name, setting in PRESET_SETTINGS.items() if setting == (ppd, pan, gp))
@@ -136,14 +132,14 @@ def naive_u(ppd):
 
 
 def table_smooth():
-    conv = kernel_u(3200, 16, 10, 14.0)
+    conv = kernel_u(3200, 16, 10, 14.0) if not SMOKE else kernel_u(100, 8, 6)
     pmask = P / E_STAR <= 1e-2
     print("\n## smooth PSD (self-affine x exp(-(q/20qL)^2), qL..100 qL), zeta = 2 and 100: the q grid matters")
     print("converged: q 3200/decade, 16 panels/decade, 10 Gauss points; p/E* in [1e-10, 1e-2]")
     print("| q points/decade | max rel. error (this stage) | observed order | naive, zeta = 2 | naive, zeta = 100 |")
     print("|---|---|---|---|---|")
     prev = None
-    for ppd in (12, 25, 50, 100, 200, 400):
+    for ppd in (12, 25, 50, 100, 200, 400) if not SMOKE else (12, 25):
         err = rel_error(kernel_u(ppd).T, conv.T, pmask)
         naive = naive_u(ppd).T
         n2, n100 = (rel_error(naive[i], conv.T[i], pmask) for i in (0, 1))

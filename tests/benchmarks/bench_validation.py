@@ -2,7 +2,8 @@
 reduced pressures, and the speedup of a small validation scene from one to two workers of a
 dask.distributed LocalCluster (the same tasks, the same results).
 
-Run: python tests/bench_validation.py [--skip-solves] [--skip-cluster]   (needs tamaas, distributed)
+Run: python tests/benchmarks/bench_validation.py [--skip-solves] [--skip-cluster] [--smoke]
+(needs tamaas, distributed). --smoke: one 64^2 solve per pressure and a 32^2 scene on the cluster.
 
 Wall and CPU seconds are both printed: on a shared machine the wall time of a solve is its CPU
 time divided by the share of a core it got.
@@ -18,6 +19,8 @@ from pathlib import Path
 
 import numpy as np
 
+from _bench import SMOKE
+
 from roughcontact import engine, scene as scenes
 from roughcontact.physics.validation import bem_task
 
@@ -30,6 +33,8 @@ SCENE = {
                    "pixels_per_wavelength": [8], "realizations": 2, "max_grid": 256},
     "outputs": {"variables": ["validation_bem_contact_area_ratio"]},
 }
+if SMOKE:
+    SCENE["validation"].update(hurst=[0.8], realizations=1, max_grid=32, pixels_per_wavelength=[2])
 
 
 def _cpu() -> float:
@@ -58,12 +63,12 @@ def cluster() -> None:
                                  scheduler=c.scheduler_address)["base"]["validation_bem"]
                 walls[workers] = time.perf_counter() - t0
             print(f"{workers} worker(s): {walls[workers]:.1f} s for {res['validation_bem_contact_area_ratio'].size // 6} "
-                  "tasks (128^2, 6 loads each)", flush=True)
+                  f"tasks ({'128^2' if not SMOKE else '32^2'}, 6 loads each)", flush=True)
     print(f"speedup 1 -> 2 workers: {walls[1] / walls[2]:.2f}")
 
 
 if __name__ == "__main__":
     if "--skip-solves" not in sys.argv:
-        solves()
+        solves() if not SMOKE else solves((64,), zeta=16)
     if "--skip-cluster" not in sys.argv:
         cluster()

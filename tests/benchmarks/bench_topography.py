@@ -1,7 +1,8 @@
 """Benchmark: PSD of a 4096 x 4096 map, and PSD + cross-spectrum of a pair, against
 SurfaceTopography's ``power_spectrum_from_area`` on the same map, in one run.
 
-Run: ``python tests/bench_topography.py [n]`` (needs SurfaceTopography; about 1 GB of RAM at n = 4096).
+Run: ``python tests/benchmarks/bench_topography.py [n] [--smoke]`` (needs SurfaceTopography; about 1 GB
+of RAM at n = 4096). ``--smoke``: n = 128 (seconds, for CI).
 Each timing is the best of ``REPEAT`` runs; peak memory is measured per task in a fresh child
 process (``ru_maxrss`` minus the child's RSS once the maps are loaded), in map sizes (8 n^2 bytes).
 """
@@ -9,6 +10,7 @@ process (``ru_maxrss`` minus the child's RSS once the maps are loaded), in map s
 from __future__ import annotations
 
 import multiprocessing as mp
+import os
 import resource
 import sys
 import time
@@ -16,16 +18,15 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).parent))
-sys.path.insert(0, str(Path(__file__).parent.parent))
+from _bench import SMOKE, positional  # noqa: E402
 
 REPEAT = 2
-_CACHE = "/tmp/bench_topography_h{}.npy"
+_CACHE = f"/tmp/bench_topography_{os.getpid()}_h{{}}.npy"  # one pair per run: two runs may overlap
 _L = 1e-4
 
 
 def _maps(n):
-    from _synthetic import self_affine, synthesize
+    from roughcontact.scenes.data.synthetic import self_affine, synthesize
 
     rng = np.random.default_rng(0)
     L = _L
@@ -115,4 +116,5 @@ def main(n=4096):
 
 
 if __name__ == "__main__":
-    main(int(sys.argv[1]) if len(sys.argv) > 1 else 4096)
+    args = positional(sys.argv[1:])
+    main(int(args[0]) if args else 4096 if not SMOKE else 128)

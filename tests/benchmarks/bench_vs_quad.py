@@ -1,7 +1,7 @@
 """Benchmark: each stage at each preset against a straightforward scipy.integrate implementation
 of the same equation, in one run.
 
-    python tests/bench_vs_quad.py
+    python tests/benchmarks/bench_vs_quad.py [--smoke]
 
 For contact (eq 19 with G of eq 17), separation (eq 57) and friction (eqs 61-62) on the built-in
 scenes (eta = 0), the stage computes a sweep of N = 100 pressures (x 2 magnifications) or
@@ -10,13 +10,13 @@ same equation is evaluated by adaptive scipy quadrature at scipy's default toler
 tight one (the reference) on 4 of the sweep's points; scipy's time is scaled to the N points of
 the sweep (its cost is linear in them). Printed per stage and preset: the stage's time and error
 on those points, scipy's time and error, and the ratios (speed: scipy / stage; error: stage /
-scipy).
+scipy). --smoke: 10 sweep points, one run per preset, the fast preset only, 2 points for scipy
+at tolerances 1e-6 and 1e-8 (seconds, for CI).
 """
 
 from __future__ import annotations
 
 import math
-import sys
 import tempfile
 import time
 from pathlib import Path
@@ -25,14 +25,14 @@ import numpy as np
 from scipy.integrate import quad
 from scipy.special import erf
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _bench import SMOKE
 
-from roughcontact import engine, scene as scenes  # noqa: E402
-from roughcontact.physics.spectra import self_affine_hrms_factor  # noqa: E402
-from test_friction import _brute_force_mu  # noqa: E402
-from test_separation import brute_force_u  # noqa: E402
+from reference_solutions import brute_force_mu, brute_force_u
+from roughcontact import engine, scene as scenes
+from roughcontact.physics.spectra import self_affine_hrms_factor
 
-SCIPY_DEFAULT, TIGHT = 1.49e-8, 1e-11
+SCIPY_DEFAULT, TIGHT = (1.49e-8, 1e-11) if not SMOKE else (1e-6, 1e-8)
+PRESETS, REPEAT = (("fast", "default", "accurate"), 3) if not SMOKE else (("fast",), 1)
 
 
 def _stage(scene_name, preset, overrides, stage, variable):
@@ -44,7 +44,7 @@ def _stage(scene_name, preset, overrides, stage, variable):
     sc = scenes.from_dict(raw)
     best = math.inf
     with tempfile.TemporaryDirectory() as tmp:
-        for _ in range(3):
+        for _ in range(REPEAT):
             t0 = time.perf_counter()
             res = engine.run(sc, Path(tmp), targets=[variable], force=("all",), report=engine.Reporter(None))
             best = min(best, time.perf_counter() - t0)
@@ -77,14 +77,14 @@ def separation_quad(points, epsrel):
 def friction_quad(points, rtol):
     sc = scenes.load("friction")
     v = sc.values
-    return np.array([_brute_force_mu(pt["v"], v["modulus"], [v["substrate"], v["solid"]], v["load"]["p"],
+    return np.array([brute_force_mu(pt["v"], v["modulus"], [v["substrate"], v["solid"]], v["load"]["p"],
                                      v["material"]["nu"], rtol=rtol)[0] for pt in points])
 
 
-N = 100
+N = 100 if not SMOKE else 10
 SWEEP_P = {"load": {"p": {"from": "1e3 Pa", "to": "1e10 Pa", "num": N}}, "contact": {"zeta": [4.0, 200.0]}}
 SWEEP_V = {"friction": {"v": {"from": "1e-6 m/s", "to": "1e2 m/s", "num": N}}}
-PICK = [0, 33, 66, 99]
+PICK = [0, 33, 66, 99] if not SMOKE else [0, 9]
 
 CASES = [
     ("contact", "default", "contact_area_ratio", contact_quad, SWEEP_P, 2 * N),
@@ -99,15 +99,15 @@ def _points(da):
     values = da[dim].values[PICK]
     zetas = da["zeta"].values if "zeta" in da.dims else [None]
     pts = [{dim: float(x), "eta": 0.0, **({"zeta": float(z)} if z is not None else {})} for x in values for z in zetas]
-    return pts[:: max(1, len(pts) // 4)][:4]
+    return pts[:: max(1, len(pts) // 4)][:4 if not SMOKE else 2]
 
 
 def main() -> None:
     print(f"{'stage':11s} {'preset':9s} {'stage s':>9s} {'stage err':>10s} {'scipy s':>9s} {'scipy err':>10s}"
           f" {'speed x':>8s} {'err ratio':>10s}   (N = {N} sweep points; scipy timed on 4, scaled)")
     for stage, scene_name, variable, brute, overrides, n_points in CASES:
-        runs = {preset: _stage(scene_name, preset, overrides, stage, variable) for preset in ("fast", "default", "accurate")}
-        points = _points(runs["default"][0])
+        runs = {preset: _stage(scene_name, preset, overrides, stage, variable) for preset in PRESETS}
+        points = _points(runs[PRESETS[-1] if SMOKE else "default"][0])
         reference, _ = _timed(brute, points, TIGHT)
         scipy_values, scipy_time = _timed(brute, points, SCIPY_DEFAULT)
         scipy_time *= n_points / len(points)

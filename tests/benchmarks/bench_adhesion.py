@@ -1,6 +1,6 @@
 """Benchmark of the adhesion stage (not collected by pytest). Run from the worktree root:
 
-    /work/venv/bin/python tests/bench_adhesion.py
+    python tests/benchmarks/bench_adhesion.py [--smoke]
 
 Prints: the time of seed Fig 1's partial-contact curve (41 substrate hrms values) and of each
 vanishing-hrms root at the default resolution; the convergence of the vanishing hrms with the
@@ -8,17 +8,16 @@ Volterra grid (observed order), with the refinement towards zeta = 1, with the c
 point K_min and with the q grid; and the default's error against a converged run.
 Case: the built-in scene ``adhesion`` (H = 0.8, qL = q0 = 7e6 1/m, q1 = 1.4e9 1/m,
 Delta_gamma = 100 meV/A^2, E = 77.2 GPa, nu = 0.42).
+--smoke: 5 hrms values, the "converged" run at the default resolution, one setting per table.
 """
 
 from __future__ import annotations
 
-import sys
 import time
-from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from _bench import SMOKE
 
 from roughcontact.physics.adhesion import AdhesionProblem, layer_resolving_offset, zeta_grid  # noqa: E402
 from roughcontact.physics.contact import effective_modulus  # noqa: E402
@@ -31,7 +30,12 @@ DG = 1.602176634
 Q0, Q1, H = 7e6, 1.4e9, 0.8
 ANG = 1e-10
 DEFAULT = dict(ppd=10, offset=1e-10, K_min=1e-8, q_ppd=50)
-CONVERGED = dict(ppd=80, offset=1e-13, K_min=1e-11, q_ppd=200)
+CONVERGED = dict(ppd=80, offset=1e-13, K_min=1e-11, q_ppd=200) if not SMOKE else DEFAULT
+
+
+def settings(*values):
+    """The values a table runs through (only the first with --smoke)."""
+    return values if not SMOKE else values[:1]
 
 
 def setup(q_ppd):
@@ -61,8 +65,8 @@ def h_star(ppd, offset, K_min, q_ppd, h2=0.0, eta=0.0, lo=5 * ANG, hi=40 * ANG):
 
 
 def main():
-    hs = np.linspace(1, 30, 41) * ANG
-    print("== Fig 1 partial-contact curve, 41 hrms values (1-30 A), default resolution")
+    hs = np.linspace(1, 30, 41 if not SMOKE else 5) * ANG
+    print(f"== Fig 1 partial-contact curve, {hs.size} hrms values (1-30 A), default resolution")
     t, K, A = curve(hs, **DEFAULT)
     print(f"time {t:.2f} s ({t / hs.size * 1e3:.0f} ms per hrms value)")
     tc, Kc, Ac = curve(hs, **CONVERGED)
@@ -73,7 +77,7 @@ def main():
     print(f"{'case':22s} {'h (A)':>10s} {'time (s)':>9s}")
     cases = [("one surface", 0.0, 0.0, 5, 40), ("pair eta = 0", 6 * ANG, 0.0, 5, 40),
              ("pair eta = +1", 6 * ANG, 1.0, 10, 40), ("pair eta = -1", 6 * ANG, -1.0, 5, 40)]
-    for name, h2, eta, lo, hi in cases:
+    for name, h2, eta, lo, hi in settings(*cases):
         t, h = h_star(**DEFAULT, h2=h2, eta=eta, lo=lo * ANG, hi=hi * ANG)
         print(f"{name:22s} {h / ANG:10.5f} {t:9.2f}")
 
@@ -82,7 +86,7 @@ def main():
     print("\n== Volterra grid (points per decade of zeta - 1); others converged")
     print(f"{'ppd':>5s} {'nodes':>6s} {'h* (A)':>12s} {'rel. error':>11s} {'order':>6s} {'time (s)':>9s}")
     prev = None
-    for ppd in (5, 10, 20, 40):
+    for ppd in settings(5, 10, 20, 40):
         t, h = h_star(ppd, CONVERGED["offset"], CONVERGED["K_min"], CONVERGED["q_ppd"])
         err = abs(h - ref) / ref
         order = f"{np.log2(prev / err):6.2f}" if prev else "      "
@@ -90,15 +94,15 @@ def main():
         print(f"{ppd:5d} {n:6d} {h / ANG:12.6f} {err:11.2e} {order} {t:9.2f}")
         prev = err
     print("\n== requested smallest zeta - 1 of the grid (ppd 10; reduced further when the layer needs it)")
-    for off in (1e-6, 1e-8, 1e-10, 1e-12):
+    for off in settings(1e-6, 1e-8, 1e-10, 1e-12):
         t, h = h_star(10, off, CONVERGED["K_min"], CONVERGED["q_ppd"])
         print(f"offset {off:8.0e}: h* = {h / ANG:.6f} A")
     print("\n== continuation point K_min (ppd 10)")
-    for K_min in (1e-4, 1e-6, 1e-8, 1e-10):
+    for K_min in settings(1e-4, 1e-6, 1e-8, 1e-10):
         t, h = h_star(10, CONVERGED["offset"], K_min, CONVERGED["q_ppd"])
         print(f"K_min {K_min:8.0e}: h* = {h / ANG:.6f} A")
     print("\n== q grid points per decade (ppd 10)")
-    for q_ppd in (20, 50, 200):
+    for q_ppd in settings(20, 50, 200):
         t, h = h_star(10, CONVERGED["offset"], CONVERGED["K_min"], q_ppd)
         print(f"q ppd {q_ppd:4d}: h* = {h / ANG:.6f} A")
     t, h = h_star(**DEFAULT)

@@ -1,11 +1,12 @@
 """CF compliance of the result files: the IOOS compliance-checker (``--test cf:1.11``) on every
 file each built-in scene writes.
 
-    python tests/cf_report.py [SCENE ...] [--outdir DIR]
+    python tests/benchmarks/cf_report.py [SCENE ...] [--outdir DIR] [--smoke]
 
 Runs each scene (default: every built-in scene) into a fresh folder and prints, per result
 file, the errors the checker reports (its "Errors" section: high-priority findings), then the
 total. Exit status 1 if any file has an error. Needs the test extra (compliance-checker).
+--smoke: the friction scene only (seconds, for CI).
 """
 
 from __future__ import annotations
@@ -48,8 +49,9 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("scenes", nargs="*", help="built-in scene names or files (default: every built-in scene)")
     ap.add_argument("--outdir", type=Path, help="where to run them (default: a temporary folder)")
+    ap.add_argument("--smoke", action="store_true", help="the friction scene only (seconds)")
     args = ap.parse_args()
-    names = args.scenes or sorted(scenes.builtin_scenes())
+    names = args.scenes or (sorted(scenes.builtin_scenes()) if not args.smoke else ["friction"])
     total = 0
     with tempfile.TemporaryDirectory() as tmp:
         base = args.outdir or Path(tmp)

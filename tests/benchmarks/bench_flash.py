@@ -10,7 +10,9 @@ relative error of mu, of A/A0 and of the temperature rise at q1 over all velocit
 against a converged run (200 points per decade, 48 phi nodes, 24 nodes per segment, shift step
 0.005). The PSD and the modulus are computed once per q grid and not timed.
 
-Run:  python tests/bench_flash.py  [--quick]
+Run:  python tests/benchmarks/bench_flash.py  [--quick]  [--smoke]
+
+--smoke: 5 velocities, a coarse reference and one setting (seconds, for CI).
 """
 
 from __future__ import annotations
@@ -24,8 +26,7 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 import numpy as np
 
-sys.path.insert(0, str(__import__("pathlib").Path(__file__).resolve().parent))
-
+from _bench import SMOKE  # noqa: E402
 from bench_friction import _inputs  # noqa: E402  (q, C of the 4 cases, modulus grid, p, nu, spec)
 
 from roughcontact.physics import flash, friction as physics_friction  # noqa: E402
@@ -33,6 +34,8 @@ from roughcontact.physics.viscoelastic import wlf_log10_shift  # noqa: E402
 
 LAMBDA, RHO, HEAT = 0.25, 1200.0, 1500.0
 REF = dict(ppd=200, n_phi=48, seg=24, max_shift=0.005) if "--quick" not in sys.argv else dict(ppd=60, n_phi=16, seg=12, max_shift=0.02)
+if SMOKE:
+    REF = dict(ppd=20, n_phi=16, seg=12, max_shift=0.05)
 
 
 def _shift(spec):
@@ -59,7 +62,7 @@ def run_case(v, ppd, n_phi=16, seg=12, max_shift=0.05, repeat=3):
 
 def main(argv):
     quick = "--quick" in argv
-    v = np.geomspace(1e-9, 1e3, 100)
+    v = np.geomspace(1e-9, 1e3, 100 if not SMOKE else 5)
     mu_r, area_r, rise_r, t_r, _, n_r = run_case(v, REF["ppd"], REF["n_phi"], REF["seg"], REF["max_shift"], repeat=1)
     print(f"reference: {REF['ppd']} points/decade ({n_r} q nodes), {REF['n_phi']} phi nodes, shift step "
           f"{REF['max_shift']}: {t_r:.1f} s")
@@ -71,8 +74,10 @@ def main(argv):
     pairs = [(ppd, s) for ppd in (20, 30, 40, 50, 100) for s in (0.1, 0.05, 0.02)]
     rows = []
     hot = rise_r > 1e-3  # relative error of the rise where it is above a millikelvin
-    for ppd, s in (pairs if not quick else [(20, 0.1), (40, 0.05)]):
-        mu, area, rise, tf, ti, _ = run_case(v, ppd, max_shift=s)
+    if quick or SMOKE:
+        pairs = [(20, 0.1), (40, 0.05)] if not SMOKE else [(10, 0.1)]
+    for ppd, s in pairs:
+        mu, area, rise, tf, ti, _ = run_case(v, ppd, max_shift=s, repeat=3 if not SMOKE else 1)
         e = (np.max(np.abs(mu / mu_r - 1)), np.max(np.abs(area / area_r - 1)), np.max(np.abs(rise[hot] / rise_r[hot] - 1)))
         rows.append((ppd, s, tf, ti, *e))
         print(f"| {ppd} | {s} | {tf:.2f} | {ti:.3f} | {tf / ti:.0f} | {e[0]:.2e} | {e[1]:.2e} | {e[2]:.2e} |", flush=True)
@@ -86,7 +91,7 @@ def main(argv):
     q, C, grid, Ep, Epp, p, nu, spec = _inputs(REF["ppd"])
     A, B = physics_friction.angular_integrals(q, v, grid, Ep, Epp, REF["n_phi"])
     mu_iso = physics_friction.friction_kernel(q, C[1][None], A, B, np.asarray(p), nu, segment_nodes=REF["seg"])[0]
-    for i in range(0, 100, 11):
+    for i in range(0, v.size, 11):
         print(f"| {v[i]:.3g} | {mu_iso[i]:.4g} | {mu_r[1, i]:.4g} | {rise_r[1, i]:.4g} |")
 
 

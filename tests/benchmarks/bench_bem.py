@@ -2,7 +2,8 @@
 1024^2 (the bem scene's surfaces: H = 0.8, hrms = 1 nm each, eta = 0, 4 pixels per shortest
 wavelength).
 
-Run: python tests/bench_bem.py [grid ...]   (needs the [bem] extra: tamaas)
+Run: python tests/benchmarks/bench_bem.py [grid ...] [--smoke]   (needs the [bem] extra: tamaas)
+--smoke: one 32^2 grid (seconds, for CI).
 
 Each grid runs in a fresh subprocess so that its peak resident set size (ru_maxrss) is its own;
 the table also gives the RSS after imports, so the difference is what the solve needs.
@@ -13,14 +14,12 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
-from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
+from _bench import SMOKE, positional
 
 CHILD = r"""
 import json, resource, sys, time
 import numpy as np
-sys.path.insert(0, {root!r})
 from roughcontact.physics.bem import solve_contact
 from roughcontact.physics.synthesis import grid_band, synthesize_pair
 from roughcontact.physics.spectra import self_affine_hrms_factor, self_affine_psd
@@ -50,7 +49,7 @@ def main(grids=(512, 1024)):
     print(f"{'grid':>6} {'zeta':>6} {'p/E*':>7} {'time/p (s)':>10} {'A/A0':>8} {'gap (nm)':>9} "
           f"{'synth (s)':>9} {'RSS base (MB)':>13} {'peak (MB)':>9}")
     for n in grids:
-        out = subprocess.run([sys.executable, "-c", CHILD.format(root=str(ROOT), n=int(n))],
+        out = subprocess.run([sys.executable, "-c", CHILD.format(n=int(n))],
                              capture_output=True, text=True, check=True)
         res = json.loads(out.stdout.strip().splitlines()[-1])
         for rel, t, area, gap in res["rows"]:
@@ -60,4 +59,4 @@ def main(grids=(512, 1024)):
 
 
 if __name__ == "__main__":
-    main(tuple(int(a) for a in sys.argv[1:]) or (512, 1024))
+    main(tuple(int(a) for a in positional(sys.argv[1:])) or ((512, 1024) if not SMOKE else (32,)))

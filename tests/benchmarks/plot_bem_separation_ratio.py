@@ -2,12 +2,16 @@
 docs/bem.md, "The separation ratio". Runs (or reuses) `bem` and `bem_topography` into
 OUTDIR and writes docs/img/bem-separation-ratio.png.
 
-    python tests/plot_bem_separation_ratio.py [OUTDIR]
+    python tests/benchmarks/plot_bem_separation_ratio.py [OUTDIR] [--smoke]
+
+--smoke: zeta = 8 (bem: a 32^2 grid, one realization; bem_topography: 32 pixels per wavelength),
+into a temporary folder, the figure written there too (not into docs/; seconds, for CI).
 """
 
 from __future__ import annotations
 
 import sys
+import tempfile
 from pathlib import Path
 
 import matplotlib
@@ -15,17 +19,29 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+from _bench import ROOT, SMOKE, positional  # noqa: E402
+
 from roughcontact import engine, scene  # noqa: E402
+from roughcontact.accuracy import with_settings  # noqa: E402
 from roughcontact.stages.figures.bem import reduced_pressure  # noqa: E402
 
-ROOT = Path(__file__).resolve().parent.parent
 STYLES = {"persson": "-", "yang_persson": "--", "wang_mueser": ":"}
+
+
+def _scene(name):
+    sc = scene.load(name)
+    if not SMOKE:
+        return sc
+    # zeta = 8: grid 32 / 4 pixels per wavelength (bem), 256 / 32 (bem_topography, whose maps are 256^2)
+    small = {"bem.grid": 32, "bem.realizations": 1} if name == "bem" else {"bem.pixels_per_wavelength": 32,
+                                                                            "numerics.points_per_decade": 20}
+    return with_settings(sc, {**small, "contact.zeta": [8.0]})
 
 
 def main(outdir: Path) -> None:
     fig, axes = plt.subplots(1, 2, figsize=(11.5, 4.3))
     for name, marker in (("bem", "o"), ("bem_topography", "s")):
-        ds = engine.run(scene.load(name), outdir / name)["base"]["bem"]
+        ds = engine.run(_scene(name), outdir / name)["base"]["bem"]
         if "eta" in ds.dims:
             ds = ds.sel(eta=0.0)
         x = reduced_pressure(ds).values
@@ -47,10 +63,11 @@ def main(outdir: Path) -> None:
     axes[1].set_title("against p/(E* g): one curve per theory", fontsize=9)
     fig.suptitle("Mean separation, theory / BEM: eq 57 with alpha = 0.45 (persson), Yang-Persson, Wang-Mueser")
     fig.tight_layout()
-    target = ROOT / "docs" / "img" / "bem-separation-ratio.png"
+    target = (ROOT / "docs" / "img" if not SMOKE else outdir) / "bem-separation-ratio.png"
     fig.savefig(target, dpi=110)
     print(target)
 
 
 if __name__ == "__main__":
-    main(Path(sys.argv[1]) if len(sys.argv) > 1 else Path("outputs/bem-separation-ratio"))
+    args = positional(sys.argv[1:])
+    main(Path(args[0]) if args else Path("outputs/bem-separation-ratio") if not SMOKE else Path(tempfile.mkdtemp()))

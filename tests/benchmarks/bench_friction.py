@@ -8,7 +8,9 @@ and of A/A0 over all velocities and cases against a converged run (400 points pe
 256 phi nodes, 24 nodes per q segment). It also measures the error left by the modulus grid (numerics.
 modulus_points_per_decade) against the analytic box spectrum.
 
-Run:  /work/venv/bin/python tests/bench_friction.py  [--quick]
+Run:  python tests/benchmarks/bench_friction.py  [--quick]  [--smoke]
+
+--smoke: 5 velocities, a coarse reference and one setting per table (seconds, for CI).
 """
 
 from __future__ import annotations
@@ -22,48 +24,28 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 import numpy as np
 
-sys.path.insert(0, str(__import__("pathlib").Path(__file__).resolve().parent.parent))
+from _bench import SMOKE, stage_result  # noqa: E402
 
-from roughcontact import scene as scenes
-from roughcontact.stage import StageInput
-from roughcontact.physics import friction as physics_friction
-from roughcontact.physics import viscoelastic as ve
-from roughcontact.stages import modulus as md
-from roughcontact.stages import psd as ps
+from roughcontact import scene as scenes  # noqa: E402
+from roughcontact.accuracy import with_settings  # noqa: E402
+from roughcontact.physics import friction as physics_friction  # noqa: E402
+from roughcontact.physics import viscoelastic as ve  # noqa: E402
 
-REF = (400, 256)
+REF = (400, 256) if not SMOKE else (20, 16)
 PAIRS = [(ppd, n) for ppd in (10, 20, 30, 40, 50, 100) for n in (8, 12, 16, 24, 32, 48)]
 
 
-def _scene(ppd: int, modulus_ppd: int = 20):
-    sc = scenes.load("friction")
-    values = dict(sc.values)
-    values["numerics"] = {**values["numerics"], "points_per_decade": ppd, "modulus_points_per_decade": modulus_ppd}
-    return sc, values
-
-
 def _inputs(ppd: int, modulus_ppd: int = 20):
-    """q, C (4 cases, q), omega grid, E', E'' (omega), p, nu from the built-in scene."""
-    sc, values = _scene(ppd, modulus_ppd)
-    get = lambda key: _dotted(values, key)  # noqa: E731
-    psd_params = {k: get(k) for k in ps_params()}
-    psd = ps.compute_psd(StageInput(params=psd_params))
-    only = dict(psd_params, solid=None)
-    psd_only = ps.compute_psd(StageInput(params=only))
+    """q, C (4 cases, q), omega grid, E', E'' (omega), p, nu from the built-in scene, through the
+    psd and modulus stages (their params read from the scene as the engine hands them)."""
+    sc = with_settings(scenes.load("friction"), {"numerics.points_per_decade": ppd,
+                                                 "numerics.modulus_points_per_decade": modulus_ppd})
+    psd = stage_result("psd", sc)
+    psd_only = stage_result("psd", sc, solid=None)
     C = np.vstack([psd_only["psd_combined"].values[None, :], psd["psd_combined"].values])  # (4, q)
-    mod = md.compute_modulus(StageInput(params={"modulus": get("modulus"),
-                                               "numerics.modulus_points_per_decade": modulus_ppd}))
+    mod = stage_result("modulus", sc)
     return (psd["q"].values, C, mod["omega"].values, mod["storage_modulus"].values, mod["loss_modulus"].values,
-            get("load.p"), get("material.nu"), get("modulus"))
-
-
-def ps_params():
-    return ("substrate", "solid", "interface.eta", "grid.q_min", "grid.q_max", "numerics.points_per_decade")
-
-
-def _dotted(values, key):
-    section, _, rest = key.partition(".")
-    return values[section] if not rest else (values[section] or {}).get(rest)
+            sc.get("load.p"), sc.get("material.nu"), sc.get("modulus"))
 
 
 def run_case(ppd: int, n_phi: int, v: np.ndarray, modulus_ppd: int = 20, repeat: int = 5, chunk: int = 0,
@@ -86,9 +68,10 @@ def run_case(ppd: int, n_phi: int, v: np.ndarray, modulus_ppd: int = 20, repeat:
 
 
 def main(argv):
-    quick = "--quick" in argv
-    v = np.geomspace(1e-9, 1e3, 100)
-    pairs = PAIRS if not quick else [(10, 16), (20, 24), (50, 32)]
+    quick = "--quick" in argv or SMOKE
+    v = np.geomspace(1e-9, 1e3, 100 if not SMOKE else 5)
+    pairs = PAIRS if not quick else [(10, 16), (20, 24), (50, 32)] if not SMOKE else [(10, 8)]
+    repeat = 5 if not SMOKE else 1
     mu_ref, area_ref, t_ref, n_ref = run_case(*REF, v, repeat=1, chunk=5, segment_nodes=24)
     print(f"reference: {REF[0]} points/decade ({n_ref} q nodes), {REF[1]} phi nodes: {t_ref:.2f} s")
     print(f"mu range {mu_ref.min():.3g} .. {mu_ref.max():.3g}; A/A0 range {area_ref.min():.3g} .. {area_ref.max():.3g}")
@@ -97,7 +80,7 @@ def main(argv):
     print("|---:|---:|---:|---:|---:|---:|")
     rows = []
     for ppd, n in pairs:
-        mu, area, t, nq = run_case(ppd, n, v)
+        mu, area, t, nq = run_case(ppd, n, v, repeat=repeat)
         e_mu = float(np.max(np.abs(mu / mu_ref - 1)))
         e_a = float(np.max(np.abs(area / area_ref - 1)))
         rows.append((ppd, n, t, e_mu, e_a))
@@ -111,14 +94,14 @@ def main(argv):
     print("\n| nodes per q segment (40 points/decade, 16 phi nodes) | time (s) | max rel. error mu (vs 48 nodes) |")
     print("|---:|---:|---:|")
     mu48 = run_case(40, 16, v, repeat=1, segment_nodes=48)[0]
-    for m in (4, 6, 8, 12, 16):
-        mu, _, t, _ = run_case(40, 16, v, segment_nodes=m)
+    for m in (4, 6, 8, 12, 16) if not SMOKE else (4,):
+        mu, _, t, _ = run_case(40, 16, v, repeat=repeat, segment_nodes=m)
         print(f"| {m} | {t:.3f} | {np.max(np.abs(mu / mu48 - 1)):.2e} |", flush=True)
     # error left by the modulus grid, at the reference q/phi resolution, against the analytic box
     print("\n| modulus points/decade | max rel. error of E' | of E'' | of mu (vs 80/decade) |")
     print("|---:|---:|---:|---:|")
     mu80 = run_case(100, 48, v, modulus_ppd=80, repeat=1)[0] if not quick else None
-    for mppd in (10, 20, 40):
+    for mppd in (10, 20, 40) if not SMOKE else (10,):
         q, C, grid, Ep, Epp, p, nu, spec = _inputs(50, mppd)
         w = np.geomspace(grid[0], grid[-1], 20001)
         aT = 10.0 ** ve.wlf_log10_shift(spec["T"], spec["T_ref"], spec["C1"], spec["C2"])

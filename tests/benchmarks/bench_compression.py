@@ -1,11 +1,11 @@
 """Benchmark: result files with and without compression, in one run.
 
-    python tests/bench_compression.py [--scene large_sweep] [--repeat 1]
+    python tests/benchmarks/bench_compression.py [--scene large_sweep] [--repeat 1] [--smoke]
 
 Runs the scene (every stage forced) with the compression of roughcontact.cf on, and with it
 off (what the store wrote before), alternately, and prints for each the total size of the
 result files and the best wall time of the run. The ratio is what compression costs and saves
-on this machine, under its current load.
+on this machine, under its current load. --smoke: the default scene instead (seconds, for CI).
 """
 
 from __future__ import annotations
@@ -31,7 +31,10 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--scene", default="large_sweep")
     ap.add_argument("--repeat", type=int, default=1)
+    ap.add_argument("--smoke", action="store_true", help="the default scene (seconds)")
     args = ap.parse_args()
+    if args.smoke:
+        args.scene = "default"
     sc = scenes.load(args.scene)
     threshold = cf.COMPRESS_BYTES
     best = {"compressed": (math.inf, 0), "uncompressed": (math.inf, 0)}

@@ -1,13 +1,14 @@
 """Benchmark: how long the command line takes when there is nothing (or everything) to compute,
 as ratios to ``python -c "import numpy, xarray"`` measured in the same run.
 
-    python tests/bench_startup.py [--repeat 7] [--scene default]
+    python tests/benchmarks/bench_startup.py [--repeat 7] [--scene default] [--smoke]
 
 Each command runs as a fresh process, the commands interleaved, ``--repeat`` times; the best
 time of each is kept (the machine's noise only ever adds). Targets (issue 13): ``run`` and
 ``plan`` with every result fresh at most 1.5x the baseline; the cold scene (nothing stored) at
 most 3x. "cold" keeps the parsed-scene cache (an unchanged scene); "cold, new scene" turns it
 off (ROUGHCONTACT_CACHE=off), so that the scene is parsed and the unit registry built.
+--smoke: one repeat (seconds, for CI).
 """
 
 from __future__ import annotations
@@ -40,7 +41,10 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=7)
     ap.add_argument("--scene", default="default")
+    ap.add_argument("--smoke", action="store_true", help="one repeat (seconds)")
     args = ap.parse_args()
+    if args.smoke:
+        args.repeat = 1
     cli = _cli()
     off = dict(os.environ, ROUGHCONTACT_CACHE="off")
     with tempfile.TemporaryDirectory() as tmp:

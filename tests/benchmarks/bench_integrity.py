@@ -3,7 +3,9 @@
 the time the writer waited for that hashing (the cost on the critical path), and the time to
 verify each file on reuse (read back and hash). Run it alone on the machine:
 
-    python tests/bench_integrity.py [OUTDIR]
+    python tests/benchmarks/bench_integrity.py [OUTDIR] [--smoke]
+
+--smoke: the default scene instead (seconds, for CI).
 """
 
 from __future__ import annotations
@@ -13,7 +15,11 @@ import tempfile
 import time
 from pathlib import Path
 
+from _bench import SMOKE, positional
+
 from roughcontact import engine, integrity, scene as scenes
+
+SCENE = "large_sweep" if not SMOKE else "default"
 
 
 def main(outdir: Path) -> None:
@@ -37,10 +43,10 @@ def main(outdir: Path) -> None:
 
     integrity.block_digest, integrity.Checksums.known = timed, known
     t0 = time.perf_counter()
-    engine.run(scenes.load("large_sweep"), outdir, report=engine.Reporter(None), force="all")
+    engine.run(scenes.load(SCENE), outdir, report=engine.Reporter(None), force="all")
     run = time.perf_counter() - t0
     integrity.block_digest, integrity.Checksums.known = real_digest, real_known
-    print(f"large_sweep cold run: {run:.2f} s")
+    print(f"{SCENE} cold run: {run:.2f} s")
     print(f"hashing while writing: {hashing['seconds']:.2f} s for {hashing['bytes'] / 1e6:.0f} MB "
           f"({hashing['bytes'] / 1e6 / max(hashing['seconds'], 1e-9):.0f} MB/s, background thread)")
     print(f"writer waited for the hashing: {sum(waited):.2f} s = {sum(waited) / run:.1%} of the run")
@@ -52,8 +58,9 @@ def main(outdir: Path) -> None:
 
 
 if __name__ == "__main__":
-    if len(sys.argv) > 1:
-        main(Path(sys.argv[1]))
+    args = positional(sys.argv[1:])
+    if args:
+        main(Path(args[0]))
     else:
         with tempfile.TemporaryDirectory() as tmp:
             main(Path(tmp))

@@ -1,6 +1,6 @@
 """Write the example contact.engineering containers of the built-in `container` scene (seeded).
 
-    python tests/make_example_container.py
+    python -m roughcontact.scenes.data.make_container
 
 A contact.engineering container is a ZIP file with the raw data file of every measurement of a
 surface and the metadata (`meta.yml`, and `index.json` in newer exports): name, data file,
@@ -27,17 +27,15 @@ from __future__ import annotations
 
 import io
 import json
-import sys
 import zipfile
 from pathlib import Path
 
 import numpy as np
 import yaml
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _synthetic import self_affine, synthesize, wavevectors  # noqa: E402
+from roughcontact.scenes.data.synthetic import self_affine, synthesize, wavevectors
 
-OUT = Path(__file__).resolve().parent.parent / "pipeline" / "scenes" / "data"
+OUT = Path(__file__).resolve().parent  # next to this maker
 H, Q0, N, ETA = 0.8, 2 * np.pi / 20e-6, 128, 0.6
 SCALES = (  # name, side (m), crop factor, unit, height scale, instrument, file format
     ("profilometer 80 um", 80e-6, 4, "um", None,
