@@ -30,11 +30,11 @@ import numpy as np
 import xarray as xr
 
 from . import engine, scene as scenes, store
-from .version import __version__
 from .errors import UserError
 from .progress import SILENT, Reporter
 from .scene import PRESETS, Scene
 from .stage import Stage, sections
+from .version import __version__
 
 #: below this fraction of an output's largest value, errors are measured against the fraction
 FLOOR = 1e-6

@@ -12,11 +12,12 @@ import traceback
 import warnings
 from pathlib import Path
 
-from . import __version__, engine, scene as scenes, store
+from . import engine, scene as scenes, store
 from .errors import ComputationError, SceneWarning, UserError
 from .scene import units_of
 from .stage import stages
 from .units import display
+from .version import __version__
 
 
 def _parser() -> argparse.ArgumentParser:

@@ -87,8 +87,8 @@ def scheduler(setting: str) -> Iterator[object]:
 
 def _worker_version() -> str:
     """Run on each worker: the roughcontact version it can import (stages included)."""
-    from roughcontact.version import __version__
     from roughcontact.stage import stages
+    from roughcontact.version import __version__
 
     stages()
     return __version__

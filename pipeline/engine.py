@@ -19,10 +19,10 @@ from . import integrity, preflight, reuse, sizing, store
 from .errors import UserError
 from .progress import Reporter
 from .results import StageResults
-from .schema import MISSING, did_you_mean
 from .scene import Scene, units_of
-from .units import display
+from .schema import MISSING, did_you_mean
 from .stage import Shape, Stage, StageInput, coords, producer_of, stages
+from .units import display
 
 
 @dataclass

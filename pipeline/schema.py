@@ -16,6 +16,7 @@ from typing import Any, Callable, Mapping
 import numpy as np
 
 from .errors import UserError
+from .machine import check_sweep_length
 from .units import to_si
 
 REQUIRED = object()
@@ -230,8 +231,6 @@ def parse_sweep(raw: Any, units: str, key: str, *, difference: bool = False):
         num = raw["num"]
         if isinstance(num, bool) or not isinstance(num, int) or num < 1:
             raise UserError(f"'num' must be a whole number >= 1, got {num!r}", key=f"{key}.num")
-        from .sizing import check_sweep_length
-
         check_sweep_length(num, f"{key}.num")
         spacing = raw.get("spacing", "log")
         if spacing == "log":

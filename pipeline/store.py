@@ -22,8 +22,9 @@ from typing import Any, Mapping
 import numpy as np
 import xarray as xr
 
-from . import __version__, cf, integrity, ncio
+from . import cf, integrity, ncio
 from .errors import OutputError
+from .version import __version__
 
 TMP_PREFIX = ".tmp-"
 

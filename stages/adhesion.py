@@ -14,11 +14,26 @@ import numpy as np
 import xarray as xr
 
 from roughcontact.physics.adhesion import (
-    MODELS, AdhesionProblem, adhesion_length, elastic_energy_coefficients, layer_resolving_offset, zeta_grid,
+    MODELS,
+    AdhesionProblem,
+    adhesion_length,
+    elastic_energy_coefficients,
+    layer_resolving_offset,
+    zeta_grid,
 )
 from roughcontact.physics.volterra import solve_partial_contact, vanishing_hrms_from_sweep
 from roughcontact.stage import (
-    ComputationError, Figure, Param, Section, Shape, Stage, StageInput, UserError, Var, register, register_params,
+    ComputationError,
+    Figure,
+    Param,
+    Section,
+    Shape,
+    Stage,
+    StageInput,
+    UserError,
+    Var,
+    register,
+    register_params,
     register_section,
 )
 

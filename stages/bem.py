@@ -21,7 +21,17 @@ from roughcontact.physics.bem import SolverMissing, SubPixelContact, contact_pai
 from roughcontact.physics.estimators import rms_slope_of_map
 from roughcontact.physics.synthesis import band_limit, grid_band, synthesize_pair, white_noise_pair
 from roughcontact.stage import (
-    Figure, Param, Section, Shape, Stage, StageInput, UserError, Var, register, register_params, register_section,
+    Figure,
+    Param,
+    Section,
+    Shape,
+    Stage,
+    StageInput,
+    UserError,
+    Var,
+    register,
+    register_params,
+    register_section,
 )
 
 from .figures.bem import figure_bem_comparison, figure_bem_reduced_pressure

@@ -18,11 +18,30 @@ import numpy as np
 import xarray as xr
 
 from roughcontact.physics.friction import angular_integrals, friction_kernel
-from roughcontact.stage import Figure, Param, Section, Stage, StageInput, UserError, Var, register, register_params, register_section
+from roughcontact.stage import (
+    Figure,
+    Param,
+    Section,
+    Stage,
+    StageInput,
+    UserError,
+    Var,
+    register,
+    register_params,
+    register_section,
+)
 
-from .figures.friction import figure_area_eta, figure_area_substrate, figure_mu_eta, figure_mu_substrate, figure_psds
 from .figures.flash import figure_flash
-from .shared.flash import FLASH_KEYS, FLASH_NUMERICS, FLASH_OUTPUTS, FLASH_PARAMS, check_flash, compute_flash, flash_attrs
+from .figures.friction import figure_area_eta, figure_area_substrate, figure_mu_eta, figure_mu_substrate, figure_psds
+from .shared.flash import (
+    FLASH_KEYS,
+    FLASH_NUMERICS,
+    FLASH_OUTPUTS,
+    FLASH_PARAMS,
+    check_flash,
+    compute_flash,
+    flash_attrs,
+)
 from .shared.magnification import CORRECTION_KEYS, area_correction
 
 # ----------------------------------------------------------------------------------------

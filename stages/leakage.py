@@ -13,7 +13,18 @@ from __future__ import annotations
 import xarray as xr
 
 from roughcontact.physics.leakage import BRUGGEMAN_AREA, PERCOLATION_AREA, leak_rate, leakage_kernel, sealing_pressure
-from roughcontact.stage import Figure, Param, Section, Shape, Stage, StageInput, Var, register, register_params, register_section
+from roughcontact.stage import (
+    Figure,
+    Param,
+    Section,
+    Shape,
+    Stage,
+    StageInput,
+    Var,
+    register,
+    register_params,
+    register_section,
+)
 
 from .figures.interface import figure_leakage
 from .shared.material import MATERIAL_KEYS, e_star

@@ -36,13 +36,31 @@ from roughcontact.physics.viscoelastic import (
     worst_shift,
 )
 from roughcontact.stage import (
-    FileInput, Figure, Param, Section, Stage, StageInput, UserError, Var, register, register_params, register_section,
+    Figure,
+    FileInput,
+    Param,
+    Section,
+    Stage,
+    StageInput,
+    UserError,
+    Var,
+    register,
+    register_params,
+    register_section,
 )
 
 from .figures.mastercurve import figure_master_curve
 from .figures.modulus import figure_modulus
-from .shared.mastercurve import DMA_COORDS, DMA_OUTPUTS, DMA_PARAMS, dma_options, dma_variables, master_curve, shift_spec
-from .shared.mastercurve import model as dma_model
+from .shared.mastercurve import (
+    DMA_COORDS,
+    DMA_OUTPUTS,
+    DMA_PARAMS,
+    dma_options,
+    dma_variables,
+    master_curve,
+    model as dma_model,
+    shift_spec,
+)
 
 
 def complex_modulus(ds: xr.Dataset) -> xr.DataArray:

@@ -11,7 +11,6 @@ import numpy as np
 import xarray as xr
 
 from roughcontact.physics.quadrature import log_grid, log_grid_size
-from roughcontact.physics.uncertainty import combined_psd_error
 from roughcontact.physics.spectra import (
     CONVENTIONS,
     extend_psd,
@@ -22,11 +21,12 @@ from roughcontact.physics.spectra import (
     self_affine_hrms_factor,
     self_affine_psd,
 )
-from roughcontact.stage import FileInput, Shape, Stage, StageInput, UserError, Upstream, Var, register
+from roughcontact.physics.uncertainty import combined_psd_error
+from roughcontact.stage import FileInput, Shape, Stage, StageInput, Upstream, UserError, Var, register
 
+from .shared.grid import scope_attrs
 from .shared.maps import measured_coherence_on_grid, measured_psd_on_grid
 from .shared.measured import coherence_error_grid, drawn_coherence, drawn_psd, psd_error_grid
-from .shared.grid import scope_attrs
 from .shared.surfaces import MEASURED_SURFACES, SURFACES, is_measured, is_rough, surface_bands, surface_reads
 
 

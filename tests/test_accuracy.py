@@ -7,13 +7,12 @@ import io
 import numpy as np
 import pytest
 import xarray as xr
+from conftest import make_scene
 
 from roughcontact import scene as scenes
 from roughcontact.accuracy import FLOOR, MEASURE, measure, scaled_error
 from roughcontact.cli import main
 from roughcontact.progress import Reporter
-
-from conftest import make_scene
 
 
 def _da(values, p=None):

@@ -11,12 +11,17 @@ from scipy.special import erf
 from roughcontact import engine, scene as scenes
 from roughcontact.errors import ComputationError, UserError
 from roughcontact.physics.adhesion import (
-    AdhesionProblem, adhesion_length, gamma_eff_full_contact, layer_resolving_offset, surface_area_factor, zeta_grid,
+    AdhesionProblem,
+    adhesion_length,
+    gamma_eff_full_contact,
+    layer_resolving_offset,
+    surface_area_factor,
+    zeta_grid,
 )
 from roughcontact.physics.contact import effective_modulus
-from roughcontact.physics.volterra import detachment_volterra, solve_partial_contact, vanishing_scale
-from roughcontact.physics.spectra import psd_combined, self_affine_hrms_factor, self_affine_psd
 from roughcontact.physics.quadrature import log_grid
+from roughcontact.physics.spectra import psd_combined, self_affine_hrms_factor, self_affine_psd
+from roughcontact.physics.volterra import detachment_volterra, solve_partial_contact, vanishing_scale
 
 E_STAR = effective_modulus(77.2e9, 0.42)
 DG = 1.602176634  # 100 meV/angstrom^2 in J/m^2

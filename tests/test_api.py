@@ -13,11 +13,10 @@ import matplotlib
 import numpy as np
 import pytest
 import xarray as xr
+from conftest import make_scene
 
 import roughcontact as rc
 from roughcontact.errors import UserError
-
-from conftest import make_scene
 
 ROOT = Path(__file__).resolve().parent.parent
 

@@ -18,12 +18,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 import xarray as xr
+from conftest import make_scene
 
 import roughcontact
 from roughcontact import engine, scene as scenes, sizing, stage as stage_api
 from roughcontact.stage import Shape, Stage, StageInput, UserError, Var
-
-from conftest import make_scene
 
 ROOT = Path(__file__).resolve().parent.parent
 LAYERS = {"pipeline": ROOT / "pipeline", "stages": ROOT / "stages", "physics": ROOT / "physics"}

@@ -2,10 +2,9 @@
 and nothing written."""
 
 import pytest
+from conftest import SURFACE, make_scene
 
 from roughcontact.cli import main
-
-from conftest import SURFACE, make_scene
 
 
 def _run(tmp_path, capsys, path):

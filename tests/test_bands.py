@@ -19,9 +19,6 @@ import pytest
 import scipy.stats
 
 sys.path.insert(0, str(Path(__file__).parent))
-from roughcontact.scenes.data.synthetic import self_affine, synthesize
-from roughcontact.scenes.data.make_container import write_container
-
 from roughcontact import engine, scene  # noqa: E402
 from roughcontact.errors import UserError  # noqa: E402
 from roughcontact.physics.contact import contact_area_ratio, persson_G  # noqa: E402
@@ -34,6 +31,8 @@ from roughcontact.physics.uncertainty import (  # noqa: E402
     psd_draws_on_grid,
     quantiles,
 )
+from roughcontact.scenes.data.make_container import write_container
+from roughcontact.scenes.data.synthetic import self_affine, synthesize
 
 DATA = Path(__file__).resolve().parent.parent / "pipeline" / "scenes" / "data"
 L, H, Q0 = 20e-6, 0.8, 2 * np.pi / 5e-6

@@ -15,8 +15,8 @@ import sys
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
+from reference_solutions import westergaard_contact_fraction, westergaard_full_contact_pressure
 
 from roughcontact import cli
 from roughcontact.errors import UserError
@@ -35,8 +35,6 @@ from roughcontact.physics.synthesis import (
 from roughcontact.stages.bem import EXTRA, solve_pair
 from roughcontact.stages.figures.bem import figure_bem_comparison
 from roughcontact.stages.shared.maps import map_band
-
-from reference_solutions import westergaard_contact_fraction, westergaard_full_contact_pressure
 
 # a self-affine PSD in reduced units: qL = 1 (map side 2 pi), roll-off at 4, cut-off 100
 Q = np.geomspace(1.0, 100.0, 201)

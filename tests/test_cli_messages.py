@@ -2,13 +2,12 @@
 right, quantities printed with units at readable precision, scenes described."""
 
 import pytest
+from conftest import make_scene
 
 from roughcontact import scene as scenes
 from roughcontact.cli import main
 from roughcontact.errors import UserError
 from roughcontact.units import readable, to_si
-
-from conftest import make_scene
 
 
 def _err(capsys):

@@ -3,13 +3,12 @@ normalisation and load balance, scaling, ordering in eta, and the extremes."""
 
 import numpy as np
 import pytest
+from conftest import SURFACE, make_scene
 from hypothesis import given, settings, strategies as st
+from reference_solutions import contact_area_ratio as area_eq19, self_affine_C0, self_affine_G
 from scipy import integrate
 
 from roughcontact.physics.contact import contact_area_ratio, effective_modulus, stress_distribution
-
-from conftest import SURFACE, make_scene
-from reference_solutions import contact_area_ratio as area_eq19, self_affine_C0, self_affine_G
 
 E, NU = 77.2e9, 0.42
 E_STAR = E / (1 - NU**2)

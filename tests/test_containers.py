@@ -14,13 +14,12 @@ import numpy as np
 import pytest
 
 sys.path.insert(0, str(Path(__file__).parent))
-from roughcontact.scenes.data.synthetic import self_affine, synthesize, wavevectors
-from roughcontact.scenes.data.make_container import write_container
-
 from roughcontact import engine, scene  # noqa: E402
 from roughcontact.errors import UserError  # noqa: E402
 from roughcontact.physics.estimators import log_bin_edges  # noqa: E402
 from roughcontact.readers import READERS  # noqa: E402
+from roughcontact.scenes.data.make_container import write_container
+from roughcontact.scenes.data.synthetic import self_affine, synthesize, wavevectors
 
 pytest.importorskip("SurfaceTopography")
 

@@ -6,16 +6,21 @@ monotonicity and the extremes; the stage applies the scene's choice to A/A0 and 
 import numpy as np
 import pytest
 import xarray as xr
+from conftest import make_scene
 from hypothesis import given, settings, strategies as st
 from scipy import integrate
 from scipy.special import erf
 
 from roughcontact.physics.contact import contact_area_ratio, stress_distribution
 from roughcontact.physics.corrections import (
-    DEFAULT_GAMMA, check_gamma, corrected_area, corrected_G, reduced_variance, variance_factor, variance_function,
+    DEFAULT_GAMMA,
+    check_gamma,
+    corrected_area,
+    corrected_G,
+    reduced_variance,
+    variance_factor,
+    variance_function,
 )
-
-from conftest import make_scene
 
 VARIANTS = [("yang_persson", 0.45), ("yang_persson", 0.42), ("wang_mueser", 5.0 / 9.0)]
 

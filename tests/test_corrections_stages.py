@@ -4,13 +4,12 @@ friction stage's P(q) (the same universal map of eq 31's argument)."""
 
 import numpy as np
 import pytest
+from conftest import make_scene
 from scipy.special import erf
+from test_friction import _run, _scene
 
 from roughcontact.physics.contact import persson_G
 from roughcontact.physics.corrections import DEFAULT_GAMMA, corrected_area
-
-from conftest import make_scene
-from test_friction import _run, _scene
 
 
 @pytest.mark.parametrize("correction, refinement", [("persson", "none"), ("yang_persson", "yang_persson"),
@@ -102,8 +101,9 @@ def test_flash_temperature_uses_the_corrected_contact_fraction():
     """With infinite conductivity the flash march is the isothermal theory, also with a
     contact-area correction: the same mu and A/A0 as the isothermal kernel with that correction,
     and more contact than without it."""
-    from roughcontact.physics import flash, friction as fr
     from test_flash import BOX_TREAD, NU, SIGMA0, _material, _psd
+
+    from roughcontact.physics import flash, friction as fr
 
     q, C = _psd()
     v = np.geomspace(1e-6, 1e2, 5)

@@ -7,11 +7,10 @@ import os
 import numpy as np
 import pytest
 import xarray as xr
+from conftest import make_scene
 
 from roughcontact import engine, scene as scenes, store
 from roughcontact.cli import main
-
-from conftest import make_scene
 
 
 def _plan(raw, outdir):

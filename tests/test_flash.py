@@ -19,14 +19,12 @@ import pytest
 
 from roughcontact import engine, scene as scenes
 from roughcontact.errors import UserError
-from roughcontact.physics import flash
-from roughcontact.physics import friction as fr
-from roughcontact.physics import viscoelastic as ve
+from roughcontact.physics import flash, friction as fr, viscoelastic as ve
 from roughcontact.physics.quadrature import integral, log_grid
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from test_friction import _scene  # noqa: E402
 from reference_solutions import self_affine_C0  # noqa: E402
+from test_friction import _scene  # noqa: E402
 
 QUIET = engine.Reporter(None)
 RUBBER = dict(conductivity=0.25, diffusivity=0.25 / (1200.0 * 1500.0))  # W/(m K), m^2/s: typical filled rubber

@@ -7,23 +7,18 @@ independent brute-force evaluation of eqs 61-62 by scipy.
 
 from __future__ import annotations
 
-
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
-from hypothesis import strategies as st
+from hypothesis import HealthCheck, given, settings, strategies as st
+from reference_solutions import brute_force_mu
 from scipy.special import erf
 
 from roughcontact import engine, scene as scenes
 from roughcontact.errors import UserError
-from roughcontact.stages import friction as fr
-from roughcontact.stages import modulus as md
+from roughcontact.physics import friction as physics_friction, viscoelastic as ve
 from roughcontact.physics.contact import persson_G
-from roughcontact.physics import friction as physics_friction
-from roughcontact.physics import viscoelastic as ve
 from roughcontact.physics.quadrature import log_grid
-
-from reference_solutions import brute_force_mu
+from roughcontact.stages import friction as fr, modulus as md
 
 QUIET = engine.Reporter(None)
 

@@ -13,15 +13,14 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from conftest import make_scene
+from reference_solutions import self_affine_C0, self_affine_psd, self_affine_q3C_integral
 from scipy import integrate, special
 
 from roughcontact import cli
 from roughcontact.physics.interface import barber_conductance, contact_stiffness, stiffness_from_psd
 from roughcontact.physics.quadrature import log_grid
 from roughcontact.physics.separation import mean_separation, separation_nodes
-
-from conftest import make_scene
-from reference_solutions import self_affine_C0, self_affine_psd, self_affine_q3C_integral
 
 H, QL, Q0, Q1 = 0.8, 2e8, 8e8, 4e10
 E_STAR = 77.2e9 / (1 - 0.42**2)

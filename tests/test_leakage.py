@@ -15,9 +15,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from conftest import make_scene
+from reference_solutions import reynolds_sinusoidal_gap
 from scipy.special import erf, erfinv
 
 from roughcontact import cli
+from roughcontact.physics.contact import persson_G
 from roughcontact.physics.leakage import (
     bruggeman_flow_factor,
     critical_gap,
@@ -26,14 +29,10 @@ from roughcontact.physics.leakage import (
     gap_distribution,
     sealing_pressure,
 )
-from roughcontact.physics.contact import persson_G
 from roughcontact.physics.quadrature import log_grid
 from roughcontact.physics.reynolds import flow_factors, percolates
 from roughcontact.physics.separation import mean_separation, separation_nodes
 from roughcontact.physics.spectra import self_affine_psd
-
-from conftest import make_scene
-from reference_solutions import reynolds_sinusoidal_gap
 
 E_STAR = 77.2e9 / (1 - 0.42**2)
 NUMERICS = dict(panels_per_decade=2, order=3, depth=10.0)

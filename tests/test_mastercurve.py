@@ -15,8 +15,7 @@ import pytest
 from roughcontact import engine, scene as scenes
 from roughcontact.cli import main
 from roughcontact.errors import UserError
-from roughcontact.physics import mastercurve as mc
-from roughcontact.physics import viscoelastic as ve
+from roughcontact.physics import mastercurve as mc, viscoelastic as ve
 
 QUIET = engine.Reporter(None)
 

@@ -7,6 +7,7 @@ import io
 import pickle
 
 import numpy as np
+from conftest import make_scene
 
 from roughcontact import engine, scene as scenes
 from roughcontact.cli import main
@@ -16,8 +17,6 @@ from roughcontact.physics.quadrature import log_grid
 from roughcontact.physics.spectra import self_affine_hrms_factor, self_affine_psd
 from roughcontact.physics.volterra import solve_partial_contact
 from roughcontact.progress import Reporter, Tick
-
-from conftest import make_scene
 
 
 class Terminal(io.StringIO):

@@ -5,13 +5,18 @@ import json
 import numpy as np
 import pytest
 import xarray as xr
+from conftest import SURFACE, make_scene
 from hypothesis import given, settings, strategies as st
 
 from roughcontact.errors import UserError
-from roughcontact.physics.spectra import CONVENTIONS, hrms_from_psd, psd_combined, self_affine_hrms_factor, self_affine_psd
 from roughcontact.physics.quadrature import log_grid
-
-from conftest import SURFACE, make_scene
+from roughcontact.physics.spectra import (
+    CONVENTIONS,
+    hrms_from_psd,
+    psd_combined,
+    self_affine_hrms_factor,
+    self_affine_psd,
+)
 
 
 @pytest.mark.parametrize("q0", [None, "1e9 1/m"])

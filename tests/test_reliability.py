@@ -6,18 +6,14 @@ kernels refuse impossible physical inputs."""
 
 from __future__ import annotations
 
-import re
-
 import numpy as np
 import pytest
 import xarray as xr
+from conftest import SURFACE, cli_error_line, make_scene
 
 from roughcontact import engine, scene as scenes, sizing, store
-from roughcontact.cli import main
 from roughcontact.errors import UserError
 from roughcontact.stage import sections
-
-from conftest import cli_error_line, SURFACE, make_scene
 
 SMALL = {"points_per_decade": 10}
 

@@ -11,24 +11,21 @@ import errno
 import io
 import json
 import os
-import re
 import socket
 import subprocess
 import sys
 import threading
-import time
 from pathlib import Path
 
 import numpy as np
 import pytest
 import xarray as xr
-
-from roughcontact import engine, integrity, scene as scenes, sizing, store
-from roughcontact.cli import main
-from roughcontact.errors import OutputError, UserError
-from roughcontact.preflight import LOCK_NAME
-
 from conftest import cli_error_line, make_scene
+
+from roughcontact import engine, integrity, sizing
+from roughcontact.cli import main
+from roughcontact.errors import UserError
+from roughcontact.preflight import LOCK_NAME
 
 SMALL = {"points_per_decade": 10}
 TESTS = Path(__file__).resolve().parent

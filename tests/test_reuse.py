@@ -9,12 +9,11 @@ import shutil
 
 import numpy as np
 import pytest
+from conftest import make_scene, toml_dumps
 
 from roughcontact import engine, scene as scenes
 from roughcontact.cli import main
-
 from roughcontact.scenes.data.synthetic import self_affine, synthesize
-from conftest import make_scene, toml_dumps
 
 pytest.importorskip("SurfaceTopography")
 

@@ -5,12 +5,11 @@ import dask
 import numpy as np
 import pytest
 import xarray as xr
+from conftest import SURFACE, make_scene
 
 from roughcontact import engine, scene as scenes
 from roughcontact.compute import auto_chunks
 from roughcontact.stage import StageInput, stages
-
-from conftest import SURFACE, make_scene
 
 PROVENANCE = ("history", "date_created", "git_commit", "scene", "data_checksum")
 

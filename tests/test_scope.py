@@ -7,13 +7,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import SURFACE, make_scene
 
 from roughcontact import engine, scene as scenes
 from roughcontact.cli import main
 from roughcontact.errors import SceneWarning, UserError
 from roughcontact.physics.contact import persson_G
-
-from conftest import SURFACE, make_scene
 
 ROOT = Path(__file__).resolve().parent.parent
 

@@ -11,15 +11,12 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
+from reference_solutions import brute_force_u, self_affine_q3C_integral
 from scipy.integrate import quad
 from scipy.special import erf
 
 from roughcontact import cli
-from roughcontact.scene import from_dict
-from roughcontact.stage import StageInput, stages
-from roughcontact.physics.spectra import psd_combined, self_affine_hrms_factor, self_affine_psd
 from roughcontact.physics.quadrature import gauss_legendre_panels, integral_to, inverse_cumulative_integral, log_grid
 from roughcontact.physics.separation import (
     EPSILON,
@@ -29,8 +26,9 @@ from roughcontact.physics.separation import (
     small_pressure_law,
     yang_persson_J,
 )
-
-from reference_solutions import brute_force_u, self_affine_q3C_integral
+from roughcontact.physics.spectra import psd_combined, self_affine_hrms_factor, self_affine_psd
+from roughcontact.scene import from_dict
+from roughcontact.stage import StageInput, stages
 
 H, QL, Q1 = 0.8, 2e8, 4e10
 E_STAR = 77.2e9 / (1 - 0.42**2)

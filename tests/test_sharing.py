@@ -11,11 +11,10 @@ from pathlib import Path
 import netCDF4
 import numpy as np
 import pytest
+from conftest import make_scene
 
 import roughcontact
-from roughcontact import engine, scene as scenes, store
-
-from conftest import make_scene
+from roughcontact import engine, scene as scenes
 
 ROOT = Path(__file__).resolve().parent.parent
 

@@ -17,12 +17,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import SURFACE, make_scene
 from hypothesis import HealthCheck, given, settings, strategies as st
 
 from roughcontact import engine, scene as scenes
 from roughcontact.errors import UserError
-
-from conftest import SURFACE, make_scene
 
 settings.register_profile("ci", max_examples=12, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 settings.register_profile("exhaustive", max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])

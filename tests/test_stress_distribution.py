@@ -11,13 +11,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import SURFACE, make_scene
 from hypothesis import HealthCheck, given, settings, strategies as st
+from reference_solutions import contact_area_ratio
 
 from roughcontact import engine, scene as scenes
 from roughcontact.physics.contact import stress_distribution_adaptive
-
-from conftest import SURFACE, make_scene
-from reference_solutions import contact_area_ratio
 
 settings.register_profile("ci", max_examples=12, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 settings.register_profile("exhaustive", max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])

@@ -13,12 +13,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
 
 sys.path.insert(0, str(Path(__file__).parent))
-from roughcontact.scenes.data.synthetic import self_affine, synthesize, wavevectors
-
 from roughcontact import engine, scene  # noqa: E402
 from roughcontact.errors import UserError  # noqa: E402
 from roughcontact.physics.estimators import (  # noqa: E402
@@ -31,6 +28,7 @@ from roughcontact.physics.estimators import (  # noqa: E402
 )
 from roughcontact.physics.preprocessing import detrend, tip_radius_cutoff  # noqa: E402
 from roughcontact.physics.spectra import isotropic_factor  # noqa: E402
+from roughcontact.scenes.data.synthetic import self_affine, synthesize, wavevectors
 
 L = 10e-6  # 10 um scans
 

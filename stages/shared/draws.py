@@ -7,6 +7,7 @@ import numpy as np
 
 from roughcontact.stage import Param, Section, UserError, register_section
 
+
 def _check_bands(values: dict, key: str) -> None:
     """``draws = N`` becomes the sweep dimension draw = 0..N (0: the measured spectrum)."""
     n = values.get("draws")

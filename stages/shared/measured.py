@@ -18,8 +18,8 @@ import numpy as np
 import xarray as xr
 
 from roughcontact.physics.estimators import merge_spectra
-from roughcontact.physics.preprocessing import hann_window_1d, hann_window_radial
 from roughcontact.physics.modes import window_mode_factor_area, window_mode_factor_profiles
+from roughcontact.physics.preprocessing import hann_window_1d, hann_window_radial
 from roughcontact.physics.uncertainty import (
     coherence_draws_on_grid,
     coherence_error_on_grid,

@@ -17,8 +17,14 @@ import xarray as xr
 
 from roughcontact.physics.corrections import VARIANTS
 from roughcontact.physics.spectra import psd_combined
-from roughcontact.physics.validation import case_pressures, case_spectra, deviation, extrapolated_area, lattice_moments
-from roughcontact.physics.validation import observed_order
+from roughcontact.physics.validation import (
+    case_pressures,
+    case_spectra,
+    deviation,
+    extrapolated_area,
+    lattice_moments,
+    observed_order,
+)
 from roughcontact.stage import StageInput, Var
 
 from .material import e_star

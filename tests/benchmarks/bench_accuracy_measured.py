@@ -14,7 +14,6 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
-
 from _bench import SMOKE, positional
 
 from roughcontact import engine, scene as scenes

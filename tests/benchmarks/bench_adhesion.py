@@ -16,14 +16,13 @@ from __future__ import annotations
 import time
 
 import numpy as np
-
 from _bench import SMOKE
 
 from roughcontact.physics.adhesion import AdhesionProblem, layer_resolving_offset, zeta_grid  # noqa: E402
 from roughcontact.physics.contact import effective_modulus  # noqa: E402
-from roughcontact.physics.volterra import solve_partial_contact, vanishing_scale  # noqa: E402
-from roughcontact.physics.spectra import psd_combined, self_affine_hrms_factor, self_affine_psd  # noqa: E402
 from roughcontact.physics.quadrature import log_grid  # noqa: E402
+from roughcontact.physics.spectra import psd_combined, self_affine_hrms_factor, self_affine_psd  # noqa: E402
+from roughcontact.physics.volterra import solve_partial_contact, vanishing_scale  # noqa: E402
 
 E_STAR = effective_modulus(77.2e9, 0.42)
 DG = 1.602176634

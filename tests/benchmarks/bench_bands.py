@@ -27,7 +27,6 @@ import time
 from pathlib import Path
 
 import numpy as np
-
 from _bench import SMOKE, stage_result
 
 from roughcontact import engine, scene

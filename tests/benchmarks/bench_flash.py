@@ -25,7 +25,6 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # one thread: CPU times comp
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 import numpy as np
-
 from _bench import SMOKE  # noqa: E402
 from bench_friction import _inputs  # noqa: E402  (q, C of the 4 cases, modulus grid, p, nu, spec)
 

@@ -23,13 +23,14 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # one thread: CPU times comp
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 import numpy as np
-
 from _bench import SMOKE, stage_result  # noqa: E402
 
 from roughcontact import scene as scenes  # noqa: E402
 from roughcontact.accuracy import with_settings  # noqa: E402
-from roughcontact.physics import friction as physics_friction  # noqa: E402
-from roughcontact.physics import viscoelastic as ve  # noqa: E402
+from roughcontact.physics import (
+    friction as physics_friction,  # noqa: E402
+    viscoelastic as ve,  # noqa: E402
+)
 
 REF = (400, 256) if not SMOKE else (20, 16)
 PAIRS = [(ppd, n) for ppd in (10, 20, 30, 40, 50, 100) for n in (8, 12, 16, 24, 32, 48)]

@@ -14,8 +14,8 @@ from __future__ import annotations
 
 import argparse
 import tempfile
-import tomllib
 import time
+import tomllib
 from pathlib import Path
 
 import numpy as np

@@ -16,14 +16,13 @@ from __future__ import annotations
 import time
 
 import numpy as np
+from _bench import SMOKE, stage_result  # noqa: E402
 from scipy.special import exp1
 
-from _bench import SMOKE, stage_result  # noqa: E402
-
-from roughcontact.scene import from_dict  # noqa: E402
-from roughcontact.physics.spectra import self_affine_hrms_factor, self_affine_psd  # noqa: E402
 from roughcontact.physics.quadrature import cumulative_integral, log_grid  # noqa: E402
 from roughcontact.physics.separation import mean_separation, separation_nodes  # noqa: E402
+from roughcontact.physics.spectra import self_affine_hrms_factor, self_affine_psd  # noqa: E402
+from roughcontact.scene import from_dict  # noqa: E402
 
 H, QL, Q1 = 0.8, 2e8, 4e10
 E_STAR = 77.2e9 / (1 - 0.42**2)

@@ -10,6 +10,7 @@ process (``ru_maxrss`` minus the child's RSS once the maps are loaded), in map s
 from __future__ import annotations
 
 import multiprocessing as mp
+from queue import Empty
 import os
 import resource
 import sys
@@ -17,7 +18,6 @@ import time
 from pathlib import Path
 
 import numpy as np
-
 from _bench import SMOKE, positional  # noqa: E402
 
 REPEAT = 2
@@ -53,7 +53,7 @@ def _task(name, n, queue):
     else:  # the whole stage path for one non-periodic map: checks, plane detrend, radial Hann window, PSD
         from roughcontact.physics.estimators import binned_spectra_area as spectra
         from roughcontact.readers import Topography
-        from roughcontact.stages.maps import prepare_map, process_map
+        from roughcontact.stages.shared.maps import prepare_map, process_map
 
         topo = Topography(Path("bench"), h1, (L, L), False, "m", "bench", "0")
         spec = {"analysis": "area", "hurst": 0.5}
@@ -84,6 +84,17 @@ def _rss_now():
     return 0
 
 
+def _result_of(process, queue, name):
+    """The task's result, or an error as soon as the task's process dies without one (an import
+    error in the child would otherwise leave this waiting forever)."""
+    while True:
+        try:
+            return queue.get(timeout=1.0)
+        except Empty:
+            if not process.is_alive():
+                raise SystemExit(f"benchmark task {name!r} died (exit code {process.exitcode})") from None
+
+
 def main(n=4096):
     h1, h2, _ = _maps(n)
     np.save(_CACHE.format(1), h1)
@@ -95,7 +106,7 @@ def main(n=4096):
         q = ctx.Queue()
         p = ctx.Process(target=_task, args=(name, n, q))
         p.start()
-        results[name] = q.get()
+        results[name] = _result_of(p, q, name)
         p.join()
     for i in (1, 2):
         Path(_CACHE.format(i)).unlink()

@@ -18,7 +18,6 @@ import time
 from pathlib import Path
 
 import numpy as np
-
 from _bench import SMOKE
 
 from roughcontact import engine, scene as scenes

@@ -22,12 +22,11 @@ import time
 from pathlib import Path
 
 import numpy as np
+from _bench import SMOKE
+from reference_solutions import brute_force_mu, brute_force_u
 from scipy.integrate import quad
 from scipy.special import erf
 
-from _bench import SMOKE
-
-from reference_solutions import brute_force_mu, brute_force_u
 from roughcontact import engine, scene as scenes
 from roughcontact.physics.spectra import self_affine_hrms_factor
 

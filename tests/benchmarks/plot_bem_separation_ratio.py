@@ -18,7 +18,6 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-
 from _bench import ROOT, SMOKE, positional  # noqa: E402
 
 from roughcontact import engine, scene  # noqa: E402

@@ -18,7 +18,6 @@ from pathlib import Path
 import numpy as np
 
 
-
 # The model's two laws, written here (not imported from roughcontact.physics, which the engine's
 # package folder may not import; and example data made apart from the kernels they test).
 def wlf_log10_shift(T, T_ref, C1, C2):
