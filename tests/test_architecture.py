@@ -28,8 +28,13 @@ ROOT = Path(__file__).resolve().parent.parent
 LAYERS = {"pipeline": ROOT / "pipeline", "stages": ROOT / "stages", "physics": ROOT / "physics"}
 
 
+#: the example-data makers shipped beside the built-in scenes' data: tools, not the engine (they may
+#: use the kernels that model the data they make)
+DATA_MAKERS = LAYERS["pipeline"] / "scenes" / "data"
+
+
 def _sources(layer: str):
-    return sorted(LAYERS[layer].rglob("*.py"))
+    return sorted(p for p in LAYERS[layer].rglob("*.py") if DATA_MAKERS not in p.parents)
 
 
 def _imports(path: Path):

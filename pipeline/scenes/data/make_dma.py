@@ -17,25 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-
-# The model's two laws, written here (not imported from roughcontact.physics, which the engine's
-# package folder may not import; and example data made apart from the kernels they test).
-def wlf_log10_shift(T, T_ref, C1, C2):
-    """log10 a_T = -C1 (T - T_ref) / (C2 + T - T_ref) (Williams, Landel & Ferry 1955)."""
-    dT = np.asarray(T, dtype=float) - T_ref
-    return -C1 * dT / (C2 + dT)
-
-
-def prony_modulus(omega, E0, moduli, times):
-    """E' = E0 + sum E_k x^2 / (1 + x^2), E'' = sum E_k x / (1 + x^2), x = omega tau_k (Pa), in 1/x
-    for |x| > 1 (generalized Maxwell model; Tschoegl 1989, ch. 3)."""
-    x = np.asarray(omega, dtype=float)[..., None] * np.asarray(times, dtype=float)
-    small = np.abs(x) <= 1.0
-    inv = np.where(small, 1.0, 1.0 / np.where(small, 1.0, x))
-    xs = np.where(small, x, 0.0)
-    sq = np.where(small, xs * xs / (1.0 + xs * xs), 1.0 / (1.0 + inv * inv))
-    lin = np.where(small, xs / (1.0 + xs * xs), inv / (1.0 + inv * inv))
-    return E0 + (moduli * sq).sum(-1), (moduli * lin).sum(-1)
+from roughcontact.physics.viscoelastic import prony_modulus, wlf_log10_shift
 
 OUT = Path(__file__).resolve().parent / "dma_example.txt"  # next to this maker
 C1, C2, T_REF = 12.0, 70.0, 253.15
