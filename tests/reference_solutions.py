@@ -98,8 +98,8 @@ def brute_force_u(p, zeta, C0, alpha=0.45, yang_persson=False, epsrel=1e-11, fac
     power law C0 (q/qL)^(-2-2H) (no roll-off); q = qL + t^2 so that quad sees no endpoint singularity."""
 
     def w_of(t):  # w at q = qL + t^2
-        I = self_affine_q3C_integral(t * t, C0, H, qL)
-        return (math.pi * I) ** -0.5 if I > 0 else math.inf
+        m3 = self_affine_q3C_integral(t * t, C0, H, qL)  # int q^3 C dq from qL
+        return (math.pi * m3) ** -0.5 if m3 > 0 else math.inf
 
     def inner(w):
         if not math.isfinite(w):
@@ -121,7 +121,8 @@ def brute_force_u(p, zeta, C0, alpha=0.45, yang_persson=False, epsrel=1e-11, fac
 
     # the E1 switch (w p/E* ~ 1) can sit arbitrarily close to t = 0: split the range geometrically
     edges = [0.0, *math.sqrt((zeta - 1) * qL) * np.geomspace(1e-12, 1.0, 25)]
-    return math.sqrt(math.pi) * sum(quad(outer, a, b, epsabs=0, epsrel=epsrel, limit=200)[0] for a, b in zip(edges, edges[1:]))
+    return math.sqrt(math.pi) * sum(quad(outer, a, b, epsabs=0, epsrel=epsrel, limit=200)[0]
+                                    for a, b in zip(edges, edges[1:], strict=False))
 
 
 def brute_force_mu(v, spec, psd_specs, sigma0, nu, rtol=1e-10):

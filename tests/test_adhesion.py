@@ -91,7 +91,7 @@ def test_layer_resolving_offset():
 
 def test_surface_area_factor_closed_form_equals_integral():
     for xi in (1e-3, 0.3, 1.0, 4.0, 50.0):
-        direct = quad(lambda x: np.sqrt(1 + xi * xi * x) * np.exp(-x), 0, np.inf)[0]
+        direct = quad(lambda x, xi=xi: np.sqrt(1 + xi * xi * x) * np.exp(-x), 0, np.inf)[0]
         assert surface_area_factor(xi) == pytest.approx(direct, rel=1e-10)
     assert surface_area_factor(0.0) == 1.0
 
@@ -105,7 +105,8 @@ def test_full_contact_gamma_eff_power_law_closed_form(Hx):
     m2 = C0 * q0 ** (2 + 2 * Hx) * (q1 ** (1 - 2 * Hx) - q0 ** (1 - 2 * Hx)) / (1 - 2 * Hx)  # int q^2 C dq
     xi = np.sqrt(2 * np.pi * C0 * q0 ** (2 + 2 * Hx) * (q1 ** (2 - 2 * Hx) - q0 ** (2 - 2 * Hx)) / (2 - 2 * Hx)) \
         if Hx != 1 else np.sqrt(2 * np.pi * C0 * q0**4 * np.log(q1 / q0))
-    expected = 1 + 0.5 * np.sqrt(np.pi) * xi * __import__("scipy.special").special.erfcx(1 / xi) - 2 * np.pi / delta * m2
+    erfcx = __import__("scipy.special").special.erfcx
+    expected = 1 + 0.5 * np.sqrt(np.pi) * xi * erfcx(1 / xi) - 2 * np.pi / delta * m2
     assert gamma_eff_full_contact(q, C, delta) == pytest.approx(expected, rel=1e-9)
 
 

@@ -79,7 +79,8 @@ def test_bad_input_raises_a_user_error_naming_the_key(tmp_path):
 
 
 def test_importing_the_package_imports_no_heavy_module():
-    code = ("import sys, roughcontact; heavy = [m for m in ('xarray', 'dask', 'pint', 'matplotlib', 'netCDF4', 'scipy') "
-            "if m in sys.modules]; print(heavy); roughcontact.load_scene; print('xarray' in sys.modules)")
+    code = ("import sys, roughcontact; "
+            "heavy = [m for m in ('xarray', 'dask', 'pint', 'matplotlib', 'netCDF4', 'scipy') if m in sys.modules]; "
+            "print(heavy); roughcontact.load_scene; print('xarray' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split("\n")
     assert out[0] == "[]" and out[1] == "True"

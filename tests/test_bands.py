@@ -96,7 +96,8 @@ def _band_and_truth(seed, n_points=96, draws=200, bpd=20):
     q, C, n = q[ok], C[ok], n[ok]
     C = C * bin_curvature_factor(q, C, bpd)
     grid = log_grid(q[0], q[-1], 50)
-    G = persson_G(grid, psd_draws_on_grid(np.arange(draws + 1), grid, q, C, n, "none", seed, 1), grid[-1:], 1.0)[..., -1]
+    drawn = psd_draws_on_grid(np.arange(draws + 1), grid, q, C, n, "none", seed, 1)
+    G = persson_G(grid, drawn, grid[-1:], 1.0)[..., -1]
     G_true = persson_G(grid, _psd(grid), grid[-1:], 1.0)[-1]
     p = 2 * np.sqrt(G_true) * np.array([0.02, 0.07, 0.2])  # A/A0 about 0.02, 0.08, 0.22
     band = quantiles(contact_area_ratio(p[None, :], G[1:, None]).T, [0.05, 0.95])
@@ -112,7 +113,8 @@ def test_band_of_the_contact_area_covers_the_true_value_90_percent_of_the_time()
         hits.append((lo <= true) & (true <= hi))
     coverage = np.mean(hits, axis=0)
     error = np.sqrt(0.9 * 0.1 / len(hits))
-    print(f"coverage of the 90 % band of A/A0 at A/A0 = 0.02, 0.08, 0.22: {coverage} +- {error:.3f} (binomial, n = 200)")
+    print(f"coverage of the 90 % band of A/A0 at A/A0 = 0.02, 0.08, 0.22: {coverage} +- {error:.3f} "
+          "(binomial, n = 200)")
     assert np.all(np.abs(coverage - 0.9) < 3 * error), f"coverage {coverage} +- {error:.3f}"
 
 
@@ -144,7 +146,8 @@ def test_band_coverage_through_the_pipeline(tmp_path):
         band = res["bands"]["contact_area_ratio_band"].isel(zeta=-1)
         hits.append((band.isel(quantile=0).values <= true) & (true <= band.isel(quantile=-1).values))
     coverage, error = np.mean(hits, axis=0), np.sqrt(0.09 / len(hits))
-    print(f"pipeline coverage of the 90 % band of A/A0 at p = {p} Pa: {coverage} +- {error:.3f} (binomial, n = {len(hits)})")
+    print(f"pipeline coverage of the 90 % band of A/A0 at p = {p} Pa: {coverage} +- {error:.3f} "
+          f"(binomial, n = {len(hits)})")
     assert np.all(np.abs(coverage - 0.9) < 3 * error), coverage
 
 
@@ -187,13 +190,16 @@ def test_chunking_the_draws_changes_nothing(tmp_path):
     """draw is a sweep dimension: chunked (7 draws a chunk) or not, the same draws and bands."""
     outputs = ("contact_area_ratio_band", "mean_separation_band")
     whole = engine.run(_scene(outputs=outputs), tmp_path / "a", report=engine.Reporter(None))["base"]
-    chunked = engine.run(_scene(outputs=outputs, chunks={"draw": 7}), tmp_path / "b", report=engine.Reporter(None))["base"]
-    for stage, var in (("psd", "psd_combined"), ("bands", "contact_area_ratio_band"), ("bands", "mean_separation_band")):
+    chunked = engine.run(_scene(outputs=outputs, chunks={"draw": 7}), tmp_path / "b",
+                         report=engine.Reporter(None))["base"]
+    for stage, var in (("psd", "psd_combined"), ("bands", "contact_area_ratio_band"),
+                       ("bands", "mean_separation_band")):
         assert np.array_equal(whole[stage][var].values, chunked[stage][var].values)
 
 
 def test_friction_and_adhesion_carry_bands(tmp_path):
-    raw = {"name": "af", "substrate": {"kind": "container", "container": str(DATA / "substrate.zip"), "extend": "power_law"},
+    raw = {"name": "af",
+           "substrate": {"kind": "container", "container": str(DATA / "substrate.zip"), "extend": "power_law"},
            "material": {"nu": 0.5, "E": "10 MPa"}, "load": {"p": "0.4 MPa"},
            "modulus": {"kind": "box", "E0": "5 MPa", "E_inf": "3 GPa", "tau1": "1e-6 s", "tau2": "1e4 s",
                        "T_ref": "-42.9 degC", "T": "25 degC", "shift": "wlf", "C1": 17.44, "C2": "51.6 K"},

@@ -81,7 +81,7 @@ def test_pair_coherence_is_eta(eta):
     h1, h2 = synthesize_pair(Q, C_SHAPE, C2, eta, n, q_cut=32.0, seed=11)
     coh = pair_coherence(h1, h2, 2 * np.pi / n, edges)
     ql = lattice_wavenumbers(n, 2 * np.pi / n)
-    modes = np.array([np.count_nonzero((ql >= a) & (ql < b)) for a, b in zip(edges[:-1], edges[1:])])
+    modes = np.array([np.count_nonzero((ql >= a) & (ql < b)) for a, b in zip(edges[:-1], edges[1:], strict=True)])
     tol = 5.0 * (1 - eta * eta) / np.sqrt(modes) + 1e-12
     assert np.all(np.abs(coh - eta) <= tol), (coh, tol)
 
@@ -138,7 +138,7 @@ def test_same_seed_same_surface_on_a_finer_grid():
     discretization, in the stage too)."""
     coarse = synthesize_pair(Q, C_SHAPE, 0.5 * C_SHAPE, -0.4, 32, 8.0, seed=6, realization=1)
     fine = synthesize_pair(Q, C_SHAPE, 0.5 * C_SHAPE, -0.4, 128, 8.0, seed=6, realization=1)
-    for c, f in zip(coarse, fine):
+    for c, f in zip(coarse, fine, strict=True):
         np.testing.assert_allclose(f, fourier_refine(c, 128), rtol=0, atol=1e-12 * np.abs(c).max())
         np.testing.assert_allclose(f[::4, ::4], c, rtol=0, atol=1e-12 * np.abs(c).max())
 

@@ -19,7 +19,8 @@ def test_force_of_an_unknown_or_unused_stage_names_the_option(tmp_path, capsys, 
     assert main(["run", str(path), "--outdir", str(tmp_path / "o"), "--force", "frition"]) == 2
     assert _err(capsys) == "roughcontact: error: --force: no stage 'frition' (did you mean 'friction'?)"
     assert main(["run", str(path), "--outdir", str(tmp_path / "o"), "--force", "friction"]) == 2
-    assert _err(capsys) == "roughcontact: error: --force: the scene does not use stage 'friction' (it runs psd, contact)"
+    assert _err(capsys) == ("roughcontact: error: --force: the scene does not use stage 'friction' "
+                            "(it runs psd, contact)")
     assert not list((tmp_path / "o").rglob("*.nc"))  # refused before anything was computed
 
 
@@ -47,7 +48,8 @@ def test_plan_prints_changed_quantities_with_units(tmp_path, capsys, write_scene
     out = tmp_path / "o"
     assert main(["run", str(write_scene(make_scene(material={"E": "10 MPa"}))), "--outdir", str(out), "--quiet"]) == 0
     capsys.readouterr()
-    assert main(["plan", str(write_scene(make_scene(material={"E": "20 MPa"}), name="b.toml")), "--outdir", str(out)]) == 1
+    other = write_scene(make_scene(material={"E": "20 MPa"}), name="b.toml")
+    assert main(["plan", str(other), "--outdir", str(out)]) == 1
     assert "material.E: 10 MPa -> 20 MPa" in capsys.readouterr().out
 
 

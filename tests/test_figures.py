@@ -74,7 +74,7 @@ def _check_layout(name, fig):
         drawn += len(ax.images) + sum(len(c.get_paths()) > 0 for c in ax.collections)
         for axis in (ax.xaxis, ax.yaxis):
             boxes = [t.get_window_extent(renderer) for t in axis.get_ticklabels() if t.get_visible() and t.get_text()]
-            for a, b in zip(boxes, boxes[1:]):
+            for a, b in zip(boxes, boxes[1:], strict=False):
                 assert not a.overlaps(b), f"{name}: tick labels overlap on {axis.axis_name}"
     titles = [t for t in ([fig._suptitle] if fig._suptitle else []) + [ax.title for ax in fig.axes] if t.get_text()]
     for t in titles:
@@ -84,7 +84,8 @@ def _check_layout(name, fig):
 
 
 def _matches(values, ds_at, var, scale=1.0):
-    ref = np.atleast_1d(nominal(reduce_dims(ds_at, ("p",), var)[0][var]).values) * scale  # draw 0: the measured spectrum
+    # draw 0: the measured spectrum
+    ref = np.atleast_1d(nominal(reduce_dims(ds_at, ("p",), var)[0][var]).values) * scale
     return ref.shape == values.shape and np.allclose(values, ref, rtol=1e-9, equal_nan=True)
 
 

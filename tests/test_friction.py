@@ -156,10 +156,12 @@ def _stage_at(sc, v):
     from roughcontact.stages import psd as ps
 
     values = sc.values
-    get = lambda key: values[key.partition(".")[0]] if "." not in key else values[key.partition(".")[0]][key.partition(".")[2]]  # noqa: E731
+    get = lambda key: (values[key.partition(".")[0]] if "." not in key  # noqa: E731
+                       else values[key.partition(".")[0]][key.partition(".")[2]])
     psd = ps.compute_psd(StageInput(params={k: get(k) for k in ps.STAGE.keys}))
-    mod = md.compute_modulus(StageInput(params={"modulus": values["modulus"],
-                                               "numerics.modulus_points_per_decade": values["numerics"]["modulus_points_per_decade"]}))
+    mod = md.compute_modulus(StageInput(params={
+        "modulus": values["modulus"],
+        "numerics.modulus_points_per_decade": values["numerics"]["modulus_points_per_decade"]}))
     params = {k: get(k) for k in fr.STAGE.keys}
     params["friction.v"] = v
     out = fr.compute_friction(StageInput(params=params, upstream={"psd": psd, "modulus": mod}))

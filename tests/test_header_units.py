@@ -17,7 +17,7 @@ def _scan(path, header, x_factor, h_factor, sep=" "):
     x = np.arange(512) * (10e-6 / 512)
     h = np.cumsum(rng.standard_normal(512)) * 1e-9
     lines = [header] if header else []
-    lines += [f"{a * x_factor:.12g}{sep}{b * h_factor:.12g}" for a, b in zip(x, h)]
+    lines += [f"{a * x_factor:.12g}{sep}{b * h_factor:.12g}" for a, b in zip(x, h, strict=True)]
     path.write_text("\n".join(lines) + "\n")
     return h
 
@@ -30,7 +30,8 @@ def test_header_units_are_the_units_read(tmp_path):
     assert a.unit_source == b.unit_source == "header" and (a.unit, b.unit) == ("um", "nm")
     assert np.allclose(a.heights, h, rtol=1e-9, atol=0) and np.allclose(b.heights, h, rtol=1e-9, atol=0)
     # the lateral size in metres from the x column's own unit (n dx = 10 um), whatever the height unit
-    assert a.physical_sizes == pytest.approx((10e-6,), rel=1e-9) and b.physical_sizes == pytest.approx((10e-6,), rel=1e-9)
+    assert a.physical_sizes == pytest.approx((10e-6,), rel=1e-9)
+    assert b.physical_sizes == pytest.approx((10e-6,), rel=1e-9)
 
 
 def test_a_file_that_says_nothing_still_needs_height_unit(tmp_path):

@@ -59,8 +59,8 @@ def leak_scene(**over):
 
 def test_leak_rate_scales_exactly_with_pressure_drop_viscosity_and_aspect_ratio(run_scene, tmp_path):
     base = run_scene(leak_scene(), tmp_path / "a")["base"]["leakage"]
-    other = run_scene(leak_scene(leakage={"pressure_drop": "0.35 MPa", "viscosity": "2.5 mPa*s",
-                                          "seal_width": "3 mm", "seal_length": "4 mm"}), tmp_path / "b")["base"]["leakage"]
+    changed = {"pressure_drop": "0.35 MPa", "viscosity": "2.5 mPa*s", "seal_width": "3 mm", "seal_length": "4 mm"}
+    other = run_scene(leak_scene(leakage=changed), tmp_path / "b")["base"]["leakage"]
     factor = 3.5 / 2.5 * (3.0 / 4.0) / (10.0 / 1.0)
     for method in ("critical_junction", "effective_medium"):
         a, b = base[f"leak_rate_{method}"].values, other[f"leak_rate_{method}"].values

@@ -26,7 +26,10 @@ E_RELAXED = 5e6
 C1, C2, T_REF = 10.0, 60.0, 273.15
 
 
-def sweeps(temps_C, noise=0.01, seed=1, vertical=False, freqs=np.logspace(-1, 2, 13)):
+FREQS = np.logspace(-1, 2, 13)  # Hz, the frequencies of each synthetic sweep
+
+
+def sweeps(temps_C, noise=0.01, seed=1, vertical=False, freqs=FREQS):
     """(T (K) per point, sweep index, omega (rad/s), E', E'' (Pa)) of synthetic DMA sweeps."""
     rng = np.random.default_rng(seed)
     T = np.repeat(273.15 + np.asarray(temps_C, float), freqs.size)
@@ -42,7 +45,7 @@ def sweeps(temps_C, noise=0.01, seed=1, vertical=False, freqs=np.logspace(-1, 2,
 
 def write_dma(path, T, omega, Ep, Epp, header="# T [degC]  f [Hz]  E' [MPa]  E'' [MPa]"):
     rows = [header] + [f"{t - 273.15:.3f} {w / (2 * np.pi):.6g} {a / 1e6:.8g} {b / 1e6:.8g}"
-                       for t, w, a, b in zip(T, omega, Ep, Epp)]
+                       for t, w, a, b in zip(T, omega, Ep, Epp, strict=True)]
     path.write_text("\n".join(rows) + "\n")
     return path
 

@@ -43,7 +43,8 @@ omegas = st.lists(st.floats(-30, 30), min_size=1, max_size=20).map(lambda xs: 10
 
 
 @settings(max_examples=50, deadline=None)
-@given(w=omegas, E0=st.floats(1e4, 1e9), ratio=st.floats(1.0001, 1e5), t1=st.floats(-15, 3), decades=st.floats(0.01, 20))
+@given(w=omegas, E0=st.floats(1e4, 1e9), ratio=st.floats(1.0001, 1e5), t1=st.floats(-15, 3),
+       decades=st.floats(0.01, 20))
 def test_box_conjugate_symmetry_and_positive_loss(w, E0, ratio, t1, decades):
     tau1 = 10.0**t1
     tau2 = tau1 * 10.0**decades
@@ -158,7 +159,8 @@ def test_entropic_vertical_shift_scales_by_T_over_Tref(tmp_path):
     spec = dict(BOX, T_ref="300 K", T=["300 K", "330 K"], shift="wlf", C2="51.6 K", vertical_shift="entropic")
     plain = _modulus({**spec, "vertical_shift": "none"}, tmp_path / "a")
     shifted = _modulus(spec, tmp_path / "b")
-    np.testing.assert_allclose(shifted["storage_modulus"].values[1], plain["storage_modulus"].values[1] * 1.1, rtol=1e-13)
+    np.testing.assert_allclose(shifted["storage_modulus"].values[1], plain["storage_modulus"].values[1] * 1.1,
+                               rtol=1e-13)
     np.testing.assert_allclose(shifted["vertical_shift_factor"].values, [1.0, 1.1], rtol=1e-13)
 
 

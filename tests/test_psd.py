@@ -38,11 +38,13 @@ def test_hrms_factor_is_stable_at_small_H():
 
 def test_uncorrelated_identical_surfaces_equal_one_surface_with_sqrt2_hrms(run_scene, tmp_path):
     pair = run_scene(make_scene(interface={"eta": 0.0}), outdir=tmp_path / "pair")
-    single = run_scene(make_scene(substrate=dict(SURFACE, hrms=f"{np.sqrt(2)} nm"), solid=None), outdir=tmp_path / "one")
+    single = run_scene(make_scene(substrate=dict(SURFACE, hrms=f"{np.sqrt(2)} nm"), solid=None),
+                       outdir=tmp_path / "one")
     a = pair["base"]["psd"]["psd_combined"].values
     b = single["base"]["psd"]["psd_combined"].values
     assert np.allclose(a, b, rtol=1e-12, atol=0)
-    assert np.allclose(pair["base"]["contact"]["contact_area_ratio"], single["base"]["contact"]["contact_area_ratio"], rtol=1e-12)
+    assert np.allclose(pair["base"]["contact"]["contact_area_ratio"], single["base"]["contact"]["contact_area_ratio"],
+                       rtol=1e-12)
 
 
 def test_fully_correlated_identical_surfaces_give_exactly_zero_and_full_contact(run_scene):
@@ -84,7 +86,7 @@ def test_hrms_sweep_becomes_a_dimension(run_scene):
 
 
 def _write_table(path, q, c, header="# q [1/m]  C [m^4]"):
-    lines = [header] + [f"{a:.17g} {b:.17g}" for a, b in zip(q, c)]
+    lines = [header] + [f"{a:.17g} {b:.17g}" for a, b in zip(q, c, strict=True)]
     path.write_text("\n".join(lines) + "\n")
     return path
 
@@ -135,7 +137,8 @@ def test_measured_psd_units_from_scene_and_header_agree(run_scene, tmp_path):
     a = _write_table(tmp_path / "a.txt", q * 1e-6, C * 1e24, header="# q [1/um]  C [um^4]")
     b = _write_table(tmp_path / "b.txt", q, C, header="q C")
     grid = {"q_min": "2e8 1/m", "q_max": "4e10 1/m"}
-    ra = run_scene(make_scene(substrate={"kind": "psd_file", "path": str(a)}, solid=None, grid=grid), outdir=tmp_path / "a")
+    ra = run_scene(make_scene(substrate={"kind": "psd_file", "path": str(a)}, solid=None, grid=grid),
+                   outdir=tmp_path / "a")
     rb = run_scene(make_scene(substrate={"kind": "psd_file", "path": str(b), "q_unit": "1/m", "C_unit": "m^4"},
                               solid=None, grid=grid), outdir=tmp_path / "b")
     assert np.allclose(ra["base"]["psd"]["psd_substrate"], rb["base"]["psd"]["psd_substrate"], rtol=1e-12)

@@ -79,7 +79,8 @@ PRE_COMPUTE_ERRORS = [
     ("a variant's psd file with NaN", lambda t: dict(variants={"v": {"solid": {
         "kind": "psd_file", "path": _psd_file(t, GOOD_PSD.replace("1e-33", "nan")), "extend": "zero"}}}),
      "line 3", "NaN"),
-    ("a variant's zeta", lambda t: dict(variants={"v": {"contact": {"zeta": [4.0, 1e6]}}}), "contact.zeta", "variant v"),
+    ("a variant's zeta", lambda t: dict(variants={"v": {"contact": {"zeta": [4.0, 1e6]}}}),
+     "contact.zeta", "variant v"),
     ("a flat height map", lambda t: dict(substrate=_flat_map(t, tilted=False), solid=None,
                                          outputs={"variables": ["psd_combined"]}), "flat.npy", "flat map"),
     ("a tilted plane as a map", lambda t: dict(substrate=_flat_map(t, tilted=True), solid=None,
@@ -142,7 +143,8 @@ def test_shapes_give_the_q_grid_the_stages_then_compute(tmp_path):
 HUGE = [
     ("1e12 pressures", dict(load={"p": {"from": "1 MPa", "to": "1 GPa", "num": 10**12}}), ["load.p.num", "TB"]),
     ("1e8 points per decade", dict(numerics={"points_per_decade": 10**8}), ["numerics.points_per_decade", "memory"]),
-    ("1e8 stress nodes", dict(numerics={**SMALL, "sigma_points": 10**8}, outputs={"variables": ["stress_distribution"]}),
+    ("1e8 stress nodes", dict(numerics={**SMALL, "sigma_points": 10**8},
+                              outputs={"variables": ["stress_distribution"]}),
      ["numerics.sigma_points", "memory"]),
     ("1e4 x 1e4 x 1e4 sweep", dict(load={"p": {"from": "1 MPa", "to": "1 GPa", "num": 10**4}},
                                    interface={"eta": {"from": -1.0, "to": 1.0, "num": 10**4, "spacing": "linear"}},
@@ -153,7 +155,8 @@ HUGE = [
 
 
 @pytest.mark.parametrize("label, overrides, words", HUGE, ids=[c[0] for c in HUGE])
-def test_sizes_the_machine_cannot_hold_are_refused_naming_the_keys(tmp_path, capsys, write_scene, label, overrides, words):
+def test_sizes_the_machine_cannot_hold_are_refused_naming_the_keys(tmp_path, capsys, write_scene,
+                                                                    label, overrides, words):
     path = write_scene(make_scene(**overrides))
     code, err = _cli(capsys, "run", path, "--outdir", tmp_path / "out", "--quiet")
     assert code == 2 and str(path) in err
@@ -191,7 +194,8 @@ def test_a_large_but_feasible_sweep_is_accepted(tmp_path, monkeypatch):
 def _netcdf_psd(tmp_path, q_units):
     q = np.geomspace(1e8, 1e11, 6)
     path = tmp_path / "psd.nc"
-    xr.Dataset({"C": ("q", 1e-30 * (q / 1e8) ** -3, {"units": "m^4"})}, coords={"q": ("q", q, {"units": q_units})}).to_netcdf(path)
+    xr.Dataset({"C": ("q", 1e-30 * (q / 1e8) ** -3, {"units": "m^4"})},
+               coords={"q": ("q", q, {"units": q_units})}).to_netcdf(path)
     return path
 
 
@@ -241,7 +245,8 @@ def test_netcdf_psd_needs_q_and_a_slice_of_a_larger_variable_is_selected(tmp_pat
     code, err = _cli(capsys, "run", path, "--outdir", tmp_path / "o1", "--quiet")
     assert code == 2 and str(nq) in err and "no 'q' coordinate" in err
     ours = engine.run(scenes.from_dict(make_scene(numerics=SMALL)), tmp_path / "mine", report=engine.Reporter(None))
-    solid = {"kind": "psd_file", "path": str(tmp_path / "mine" / "psd.nc"), "variable": "psd_combined", "extend": "zero"}
+    solid = {"kind": "psd_file", "path": str(tmp_path / "mine" / "psd.nc"), "variable": "psd_combined",
+             "extend": "zero"}
     path = write_scene(make_scene(solid=solid, substrate={"kind": "smooth"}, numerics=SMALL), "two_d.toml")
     code, err = _cli(capsys, "run", path, "--outdir", tmp_path / "o2", "--quiet")
     assert code == 2 and "solid.select" in err and "eta" in err and "-1, 0, 1" in err  # as stored: increasing
@@ -313,7 +318,8 @@ def test_from_dict_takes_toml_text_and_numpy_values():
         scenes.from_dict("default")
     with pytest.raises(TypeError, match="dict"):
         scenes.from_dict(["not", "a", "scene"])
-    raw = make_scene(interface={"eta": np.linspace(-1.0, 1.0, 5)}, load={"p": {"values": np.array([1.0, 10.0]), "unit": "MPa"}},
+    raw = make_scene(interface={"eta": np.linspace(-1.0, 1.0, 5)},
+                     load={"p": {"values": np.array([1.0, 10.0]), "unit": "MPa"}},
                      numerics={"points_per_decade": np.int64(10)})
     sc = scenes.from_dict(raw)
     np.testing.assert_allclose(sc.values["interface"]["eta"], np.linspace(-1, 1, 5))

@@ -100,7 +100,8 @@ def read_only_dir(tmp_path):
         yield folder
         folder.chmod(0o755)
         return
-    if subprocess.run(["mount", "-t", "tmpfs", "-o", "ro,size=64k", "tmpfs", str(folder)], capture_output=True).returncode:
+    mount = ["mount", "-t", "tmpfs", "-o", "ro,size=64k", "tmpfs", str(folder)]
+    if subprocess.run(mount, capture_output=True).returncode:
         pytest.skip("running as root and cannot mount a read-only file system here")
     try:
         yield folder
@@ -211,7 +212,8 @@ time.sleep(float(sys.argv[2]))
 def test_a_second_run_on_a_locked_folder_waits_then_runs_or_refuses(tmp_path):
     out = tmp_path / "out"
     out.mkdir()
-    holder = subprocess.Popen([sys.executable, "-c", HOLD, str(out / LOCK_NAME), "3"], stdout=subprocess.PIPE, text=True)
+    holder = subprocess.Popen([sys.executable, "-c", HOLD, str(out / LOCK_NAME), "3"],
+                              stdout=subprocess.PIPE, text=True)
     assert holder.stdout.readline().strip() == "held"
     raw = make_scene(numerics=SMALL)
     with pytest.raises(UserError, match="another roughcontact run is writing"):
@@ -316,7 +318,8 @@ EDITS = [
     ("a value in contact.nc", "contact", lambda p: _edit_value(p, "contact_area_ratio")),
     ("a coordinate in contact.nc", "contact", lambda p: _edit_value(p, "p")),
     ("a value in psd.nc", "psd", lambda p: _edit_value(p, "psd_combined")),
-    ("parameters, key kept", "contact", lambda p: _edit_attr(p, "parameters", lambda v: v.replace("77200000000", "70000000000"))),
+    ("parameters, key kept", "contact",
+     lambda p: _edit_attr(p, "parameters", lambda v: v.replace("77200000000", "70000000000"))),
     ("units of a variable", "psd", lambda p: _edit_value(p, "q") if False else _edit_units(p)),
 ]
 

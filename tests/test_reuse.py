@@ -114,7 +114,8 @@ def test_identical_stages_of_variants_are_computed_once(tmp_path, write_scene):
     assert log.count("computed in") == 3  # psd once; contact of the base (shared by 'same') and of 'softer'
     res = engine.run(scenes.load(scene), out, report=engine.Reporter(None))
     assert res["softer"]["psd"].attrs["stage_key"] == res["base"]["psd"].attrs["stage_key"]
-    np.testing.assert_array_equal(res["same"]["contact"]["contact_area_ratio"], res["base"]["contact"]["contact_area_ratio"])
+    np.testing.assert_array_equal(res["same"]["contact"]["contact_area_ratio"],
+                                  res["base"]["contact"]["contact_area_ratio"])
     assert not np.allclose(res["softer"]["contact"]["contact_area_ratio"], res["base"]["contact"]["contact_area_ratio"])
 
 

@@ -22,7 +22,7 @@ def _solid_psd(folder: Path) -> Path:
     q = np.logspace(4, 9, 51)
     C = 1e-20 * (q / 1e4) ** -3.6 * (2 * np.pi) ** 2
     path = folder / "solid_psd.txt"
-    path.write_text("# q [1/m]  C [m^4]\n" + "\n".join(f"{a:.8g} {b:.8g}" for a, b in zip(q, C)) + "\n")
+    path.write_text("# q [1/m]  C [m^4]\n" + "\n".join(f"{a:.8g} {b:.8g}" for a, b in zip(q, C, strict=True)) + "\n")
     return path
 
 

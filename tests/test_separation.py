@@ -133,8 +133,9 @@ def test_beta_sign_of_eq_60():
         return 2 * t * qq**2 * C0 * (qq / QL) ** (-2 - 2 * H) * w(t) if t > 0 else 0.0
 
     edges = [0.0, *math.sqrt(3 * QL) * np.geomspace(1e-12, 1.0, 25)]  # ln w is log-singular at t = 0
-    num = sum(quad(lambda t: weight(t) * math.log(w(t)), a, b, epsabs=0, epsrel=1e-13)[0] for a, b in zip(edges, edges[1:]))
-    den = sum(quad(weight, a, b, epsabs=0, epsrel=1e-13)[0] for a, b in zip(edges, edges[1:]))
+    spans = list(zip(edges, edges[1:], strict=False))
+    num = sum(quad(lambda t: weight(t) * math.log(w(t)), a, b, epsabs=0, epsrel=1e-13)[0] for a, b in spans)
+    den = sum(quad(weight, a, b, epsabs=0, epsrel=1e-13)[0] for a, b in spans)
     assert EPSILON == pytest.approx(0.749306, abs=1e-6)
     assert beta[0] == pytest.approx(EPSILON * math.exp(-num / den), rel=1e-7)
 
@@ -261,7 +262,7 @@ def test_s_quadrature_converges_fast_and_default_within_1e_4():
     zu = np.array([4 * QL, Q1])
     ref = kernel_u(q, C, zu, p, panels=12, order=10, depth=14.0)
     errors = [np.max(np.abs(kernel_u(q, C, zu, p, panels=2, order=n) / ref - 1)) for n in (1, 2, 3, 4)]
-    assert all(b < a / 5 for a, b in zip(errors, errors[1:])) and errors[-1] < 1e-6, errors
+    assert all(b < a / 5 for a, b in zip(errors, errors[1:], strict=False)) and errors[-1] < 1e-6, errors
     assert np.max(np.abs(kernel_u(q, C, zu, p) / ref - 1)) < 1e-4
     coarse_q = kernel_u(*seed_psd(10), zu, p)  # piecewise power law: the q grid is exact
     np.testing.assert_allclose(coarse_q, ref, rtol=1e-7)

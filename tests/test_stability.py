@@ -51,7 +51,8 @@ def _check_contact_and_separation(res):
 
 
 @settings.get_profile(PROFILE)
-@given(H1=hurst, H2=hurst, eta=coherence, decades=bandwidth, logp=st.lists(pressure, min_size=1, max_size=4, unique_by=lambda x: round(x, 6)),
+@given(H1=hurst, H2=hurst, eta=coherence, decades=bandwidth,
+       logp=st.lists(pressure, min_size=1, max_size=4, unique_by=lambda x: round(x, 6)),
        ratio=st.floats(0.0, 3.0), identical=st.booleans(), zeta_one=st.booleans())
 def test_contact_and_separation_are_finite_and_bounded(H1, H2, eta, decades, logp, ratio, identical, zeta_one):
     q1 = f"{2e8 * 10**decades!r} 1/m"

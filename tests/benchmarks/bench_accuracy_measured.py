@@ -27,7 +27,8 @@ def run(sc, settings):
     with tempfile.TemporaryDirectory() as d:
         res = engine.run(with_settings(sc, {**settings, "contact.zeta": ZETAS}), Path(d), targets=TARGETS,
                          report=engine.Reporter(None))["base"]
-        return {v: res[s][v].transpose("zeta", ...).values for s, v in (("contact", TARGETS[0]), ("separation", TARGETS[1]))}
+        return {v: res[s][v].transpose("zeta", ...).values
+                for s, v in (("contact", TARGETS[0]), ("separation", TARGETS[1]))}
 
 
 def main(name="topography", reference=1600, ppds=(50, 200, 400)):

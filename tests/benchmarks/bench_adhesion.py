@@ -70,7 +70,8 @@ def main():
     print(f"time {t:.2f} s ({t / hs.size * 1e3:.0f} ms per hrms value)")
     tc, Kc, Ac = curve(hs, **CONVERGED)
     print(f"converged run (ppd {CONVERGED['ppd']}): {tc:.1f} s")
-    print(f"default error: max |gamma_eff(1)/Delta_gamma| {np.max(np.abs(K - Kc)):.2e}, max |A/A0| {np.max(np.abs(A - Ac)):.2e}")
+    print(f"default error: max |gamma_eff(1)/Delta_gamma| {np.max(np.abs(K - Kc)):.2e}, "
+          f"max |A/A0| {np.max(np.abs(A - Ac)):.2e}")
 
     print("\n== vanishing-hrms roots, default resolution (solid hrms 6 A for the pairs)")
     print(f"{'case':22s} {'h (A)':>10s} {'time (s)':>9s}")

@@ -103,7 +103,7 @@ def main() -> None:
         print(f"single prediction:             wall {ws:6.2f} s, cpu {cs:6.2f} s")
         print(f"with bands ({DRAWS} draws + quantiles): wall {wb:6.2f} s, cpu {cb:6.2f} s")
         print(f"ratio (best of {RUNS} interleaved runs): wall {wb / ws:.1f}x, cpu {cb / cs:.1f}x; per pair (wall): "
-              + ", ".join(f"{b / a:.1f}" for a, b in zip(walls["single"], walls["bands"]))
+              + ", ".join(f"{b / a:.1f}" for a, b in zip(walls["single"], walls["bands"], strict=True))
               + f"  (target <= 20x; {DRAWS} separate predictions: ~{DRAWS}x)")
         # the engine's progress lines: "[2/5] psd: computed in 0.51 s (...) -> path"
         print("stage times with bands:", "; ".join(line.split(": computed in ")[0].split("] ")[1] + " "
@@ -118,7 +118,8 @@ def main() -> None:
     t_lin = time.perf_counter() - t0
     sel = dict(eta=0.0, zeta=zeta[0])
     print(f"\nlinearisation ({t_lin:.1f} s, one stage pass per bin and surface) against the {DRAWS} draws, eta = 0:")
-    print(" quantity   p (Pa)     measured     draws 5%     draws 95%    linear 5%    linear 95%   edge error / band width")
+    print(" quantity   p (Pa)     measured     draws 5%     draws 95%    linear 5%    linear 95%"
+          "   edge error / band width")
     for j, (name, var, scale) in enumerate((("A/A0", "contact_area_ratio", 1.0), ("u (nm)", "mean_separation", 1e9))):
         band = res["bands"][f"{var}_band"].sel(sel).isel(p=picks).values * scale
         for i in range(len(picks)):

@@ -32,7 +32,8 @@ from roughcontact.physics import flash, friction as physics_friction  # noqa: E4
 from roughcontact.physics.viscoelastic import wlf_log10_shift  # noqa: E402
 
 LAMBDA, RHO, HEAT = 0.25, 1200.0, 1500.0
-REF = dict(ppd=200, n_phi=48, seg=24, max_shift=0.005) if "--quick" not in sys.argv else dict(ppd=60, n_phi=16, seg=12, max_shift=0.02)
+REF = (dict(ppd=200, n_phi=48, seg=24, max_shift=0.005) if "--quick" not in sys.argv
+       else dict(ppd=60, n_phi=16, seg=12, max_shift=0.02))
 if SMOKE:
     REF = dict(ppd=20, n_phi=16, seg=12, max_shift=0.05)
 
@@ -77,9 +78,11 @@ def main(argv):
         pairs = [(20, 0.1), (40, 0.05)] if not SMOKE else [(10, 0.1)]
     for ppd, s in pairs:
         mu, area, rise, tf, ti, _ = run_case(v, ppd, max_shift=s, repeat=3 if not SMOKE else 1)
-        e = (np.max(np.abs(mu / mu_r - 1)), np.max(np.abs(area / area_r - 1)), np.max(np.abs(rise[hot] / rise_r[hot] - 1)))
+        e = (np.max(np.abs(mu / mu_r - 1)), np.max(np.abs(area / area_r - 1)),
+             np.max(np.abs(rise[hot] / rise_r[hot] - 1)))
         rows.append((ppd, s, tf, ti, *e))
-        print(f"| {ppd} | {s} | {tf:.2f} | {ti:.3f} | {tf / ti:.0f} | {e[0]:.2e} | {e[1]:.2e} | {e[2]:.2e} |", flush=True)
+        print(f"| {ppd} | {s} | {tf:.2f} | {ti:.3f} | {tf / ti:.0f} | {e[0]:.2e} | {e[1]:.2e} | {e[2]:.2e} |",
+              flush=True)
     ok = [r for r in rows if max(r[4], r[5]) <= 1e-4]
     if ok:
         best = min(ok, key=lambda r: r[2])

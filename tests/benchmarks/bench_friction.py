@@ -2,11 +2,11 @@
 
 The cases are those of the built-in ``friction`` scene: substrate only, and both rough with
 eta = 0, +1, -1. For each pair (q points per decade, Gauss-Legendre nodes in phi) the script
-times (CPU time, best of 5, one BLAS thread) the friction stage's kernels (angular integrals + q integrals; the PSD and the modulus
-are computed once per q grid and not timed) and measures the largest relative error of mu
-and of A/A0 over all velocities and cases against a converged run (400 points per decade,
-256 phi nodes, 24 nodes per q segment). It also measures the error left by the modulus grid (numerics.
-modulus_points_per_decade) against the analytic box spectrum.
+times (CPU time, best of 5, one BLAS thread) the friction stage's kernels (angular integrals + q
+integrals; the PSD and the modulus are computed once per q grid and not timed) and measures the
+largest relative error of mu and of A/A0 over all velocities and cases against a converged run
+(400 points per decade, 256 phi nodes, 24 nodes per q segment). It also measures the error left
+by the modulus grid (numerics.modulus_points_per_decade) against the analytic box spectrum.
 
 Run:  python tests/benchmarks/bench_friction.py  [--quick]  [--smoke]
 

@@ -118,9 +118,9 @@ def naive_u(ppd):
     """Trapezoid in q of q^2 C w E1((w p/E*)^2), w from the running integral, first node dropped."""
     q = log_grid(QL, 100 * QL, ppd)
     C = smooth_psd(q)
-    I = cumulative_integral(q, q**3 * C)
+    m3 = cumulative_integral(q, q**3 * C)  # running int q^3 C dq
     with np.errstate(divide="ignore"):
-        w = np.where(I > 0, (np.pi * I) ** -0.5, 0.0)
+        w = np.where(m3 > 0, (np.pi * m3) ** -0.5, 0.0)
     out = []
     for z in ZETA / 2:
         k = q <= z * QL * (1 + 1e-12)

@@ -53,9 +53,11 @@ def main() -> None:
                        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         cases = {
             "python -c 'import numpy, xarray'": lambda i: _timed([sys.executable, "-c", "import numpy, xarray"]),
-            "roughcontact run (all fresh)": lambda i: _timed([*cli, "run", args.scene, "--outdir", str(fresh), "--quiet"]),
+            "roughcontact run (all fresh)": lambda i: _timed(
+                [*cli, "run", args.scene, "--outdir", str(fresh), "--quiet"]),
             "roughcontact plan (all fresh)": lambda i: _timed([*cli, "plan", args.scene, "--outdir", str(fresh)]),
-            "roughcontact run (cold)": lambda i: _timed([*cli, "run", args.scene, "--outdir", f"{tmp}/cold{i}", "--quiet"]),
+            "roughcontact run (cold)": lambda i: _timed(
+                [*cli, "run", args.scene, "--outdir", f"{tmp}/cold{i}", "--quiet"]),
             "roughcontact run (cold, new scene)": lambda i: _timed(
                 [*cli, "run", args.scene, "--outdir", f"{tmp}/new{i}", "--quiet"], env=off),
         }
@@ -72,7 +74,8 @@ def main() -> None:
     if os.environ.get("PYTHONDONTWRITEBYTECODE"):
         print("note: PYTHONDONTWRITEBYTECODE is set: roughcontact's modules are compiled at every start "
               "(an install compiles them once)")
-    targets = {"roughcontact run (all fresh)": 1.5, "roughcontact plan (all fresh)": 1.5, "roughcontact run (cold)": 3.0}
+    targets = {"roughcontact run (all fresh)": 1.5, "roughcontact plan (all fresh)": 1.5,
+               "roughcontact run (cold)": 3.0}
     for name, seconds in best.items():
         target = f"  (target <= {targets[name]:g}x)" if name in targets else ""
         print(f"{name:38s} {seconds:6.3f} s  {seconds / base:5.2f}x{target}")

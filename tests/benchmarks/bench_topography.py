@@ -10,12 +10,12 @@ process (``ru_maxrss`` minus the child's RSS once the maps are loaded), in map s
 from __future__ import annotations
 
 import multiprocessing as mp
-from queue import Empty
 import os
 import resource
 import sys
 import time
 from pathlib import Path
+from queue import Empty
 
 import numpy as np
 from _bench import SMOKE, positional  # noqa: E402

@@ -47,7 +47,8 @@ def solves(grids=(512, 1024), zeta=64) -> None:
         for p in (0.01, 0.1, 0.5):  # one cold solve each
             t0, c0 = time.perf_counter(), _cpu()
             res = bem_task(0.5, zeta, 0.0, 0, n / zeta, np.array([p]), **KW)
-            print(f"{n:>6} {p:>9.2g} {res[0, 0]:>7.4f} {time.perf_counter() - t0:>9.2f} {_cpu() - c0:>8.2f}", flush=True)
+            print(f"{n:>6} {p:>9.2g} {res[0, 0]:>7.4f} {time.perf_counter() - t0:>9.2f} {_cpu() - c0:>8.2f}",
+                  flush=True)
 
 
 def cluster() -> None:
@@ -61,7 +62,8 @@ def cluster() -> None:
                 res = engine.run(scenes.from_dict(SCENE), Path(tmp) / str(workers), report=engine.Reporter(None),
                                  scheduler=c.scheduler_address)["base"]["validation_bem"]
                 walls[workers] = time.perf_counter() - t0
-            print(f"{workers} worker(s): {walls[workers]:.1f} s for {res['validation_bem_contact_area_ratio'].size // 6} "
+            tasks = res["validation_bem_contact_area_ratio"].size // 6
+            print(f"{workers} worker(s): {walls[workers]:.1f} s for {tasks} "
                   f"tasks ({'128^2' if not SMOKE else '32^2'}, 6 loads each)", flush=True)
     print(f"speedup 1 -> 2 workers: {walls[1] / walls[2]:.2f}")
 
