@@ -1,11 +1,12 @@
 """``roughcontact accuracy``: the error and cost of each stage's numerical resolution, measured.
 
-For each stage of a scene with outputs that declare a ``tolerance`` (:class:`~roughcontact.stage.Var`), the stage (and what it needs upstream)
-is run on a ladder of increasing resolutions: rung k sets every resolution setting the involved
-stages declare a ``ladder`` for to its k-th value (the last rung is the reference). The stage's
-own ladders set the number of rungs (an upstream ladder that is longer stops there). Each preset
-(fast, default, accurate) is measured the same way; a preset whose settings are those of a rung
-reuses that rung's run.
+For each stage of a scene with outputs that declare a ``tolerance``
+(:class:`~roughcontact.stage.Var`), the stage (and what it needs upstream) is run on a ladder of
+increasing resolutions: rung k sets every resolution setting the involved stages declare a
+``ladder`` for to its k-th value (the last rung is the reference). The stage's own ladders set
+the number of rungs (an upstream ladder that is longer stops there). Each preset (fast, default,
+accurate) is measured the same way; a preset whose settings are those of a rung reuses that
+rung's run.
 
 The error of an output is measured against the output's own scale (docs/accuracy.md)::
 
@@ -156,7 +157,8 @@ def measure_stage(scene: Scene, st: Stage, workdir: Path, report: Reporter = SIL
         return res["base"][st.name], float(np.median(times))
 
     try:
-        warm, _ = timed(with_settings(scene, settings[0]), "warm-up")  # imports and caches, not measured (the cheapest rung)
+        # imports and caches, not measured (the cheapest rung)
+        warm, _ = timed(with_settings(scene, settings[0]), "warm-up")
         fixed = _fixed_sweeps(scene, needed, warm)
         rung_scenes = [with_settings(scene, {**s, **fixed}) for s in settings]
         preset_scenes = {name: with_settings(scene, fixed, name) for name in PRESETS}
@@ -252,11 +254,14 @@ def _table(measured: dict) -> xr.Dataset:
     return xr.Dataset(
         {
             "rung_error": (("stage", "rung"), err, {**error, "long_name": "error of the rung against the finest rung"}),
-            "rung_time": (("stage", "rung"), secs, {"units": "s", "long_name": "median wall time of the stage and its upstream stages"}),
-            "rung_settings": (("stage", "rung"), setting.astype(str), {"units": "1", "long_name": "resolution settings of the rung"}),
+            "rung_time": (("stage", "rung"), secs,
+                          {"units": "s", "long_name": "median wall time of the stage and its upstream stages"}),
+            "rung_settings": (("stage", "rung"), setting.astype(str),
+                              {"units": "1", "long_name": "resolution settings of the rung"}),
             "preset_error": (("stage", "preset"), perr.reshape(len(names), len(PRESETS)),
                              {**error, "long_name": "error of the preset against the finest rung"}),
-            "preset_time": (("stage", "preset"), ptime.reshape(len(names), len(PRESETS)), {"units": "s", "long_name": "median wall time of the preset"}),
+            "preset_time": (("stage", "preset"), ptime.reshape(len(names), len(PRESETS)),
+                            {"units": "s", "long_name": "median wall time of the preset"}),
             "output_error": (("output", "preset"), out_err.reshape(len(outputs), len(PRESETS)),
                              {**error, "long_name": "error of each main output at each preset"}),
             "tolerance": (("stage",), tol, {"units": "1", "long_name": "target error of the default preset"}),
@@ -265,7 +270,9 @@ def _table(measured: dict) -> xr.Dataset:
             "stage": ("stage", np.array(names, dtype=str), {"units": "1", "long_name": "stage"}),
             "rung": ("rung", np.arange(rungs), {"units": "1", "long_name": "resolution rung (last: reference)"}),
             "preset": ("preset", np.array(PRESETS, dtype=str), {"units": "1", "long_name": "resolution preset"}),
-            "output": ("output", np.array([o for _, o in outputs], dtype=str), {"units": "1", "long_name": "main output"}),
-            "output_stage": ("output", np.array([n for n, _ in outputs], dtype=str), {"units": "1", "long_name": "stage of the output"}),
+            "output": ("output", np.array([o for _, o in outputs], dtype=str),
+                       {"units": "1", "long_name": "main output"}),
+            "output_stage": ("output", np.array([n for n, _ in outputs], dtype=str),
+                             {"units": "1", "long_name": "stage of the output"}),
         },
     )

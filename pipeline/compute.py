@@ -26,7 +26,8 @@ from .errors import UserError
 from .progress import Tick
 
 
-def auto_chunks(sizes: Mapping[str, int], budget_points: int, explicit: Mapping[str, int] | None = None) -> dict[str, int]:
+def auto_chunks(sizes: Mapping[str, int], budget_points: int,
+                explicit: Mapping[str, int] | None = None) -> dict[str, int]:
     """Chunk sizes per sweep dimension: explicit ones as given; the others start whole and the
     largest is halved until the product of chunk sizes is within ``budget_points``."""
     explicit = dict(explicit or {})
@@ -71,7 +72,8 @@ def scheduler(setting: str) -> Iterator[object]:
         try:
             from distributed import Client
         except ImportError:
-            raise UserError("a scheduler address needs dask.distributed: pip install distributed", key="run.scheduler") from None
+            raise UserError("a scheduler address needs dask.distributed: pip install distributed",
+                            key="run.scheduler") from None
         try:
             client = Client(setting, timeout="10s", set_as_default=False)
         except (OSError, TimeoutError) as exc:
@@ -82,7 +84,8 @@ def scheduler(setting: str) -> Iterator[object]:
         finally:
             client.close()
         return
-    raise UserError(f"scheduler {setting!r}: use threads, processes, synchronous or a tcp:// address", key="run.scheduler")
+    raise UserError(f"scheduler {setting!r}: use threads, processes, synchronous or a tcp:// address",
+                    key="run.scheduler")
 
 
 def _worker_version() -> str:
@@ -115,6 +118,11 @@ def dask_variables(ds: xr.Dataset) -> list[str]:
     return [name for name, v in ds.variables.items() if v.chunks is not None]
 
 
+def _region(offsets, idx) -> tuple[slice, ...]:
+    """The slices of block ``idx`` (one index per dimension) given each dimension's chunk offsets."""
+    return tuple(slice(int(o[i]), int(o[i + 1])) for o, i in zip(offsets, idx, strict=True))
+
+
 def write_blocks(path, ds: xr.Dataset, names: list[str], compute_with, progress=None,
                  in_flight: int | None = None, checksums=None) -> None:
     """Compute the dask variables ``names`` of ``ds`` block by block and write them into the
@@ -140,16 +148,12 @@ def write_blocks(path, ds: xr.Dataset, names: list[str], compute_with, progress=
         workers = len(client.scheduler_info()["workers"]) if client is not None else (dask.system.CPU_COUNT or 2)
         in_flight = max(2, 2 * workers)
     with ncio.dataset(path, "a") as nc:  # every call into netCDF/HDF5 under the process-wide lock (ncio)
-        for (dims, chunks), group in groups.items():
+        for (_dims, chunks), group in groups.items():
             offsets = [np.concatenate([[0], np.cumsum(c)]) for c in chunks]
             with ncio.locked():
                 targets = [nc.variables[name] for name in group]
             arrays = [ds[name].data for name in group]
             indices = itertools.product(*(range(len(c)) for c in chunks))
-
-            def region(idx):
-                return tuple(slice(int(o[i]), int(o[i + 1])) for o, i in zip(offsets, idx))
-
             while True:
                 batch = list(itertools.islice(indices, in_flight))
                 if not batch:
@@ -162,12 +166,12 @@ def write_blocks(path, ds: xr.Dataset, names: list[str], compute_with, progress=
                     results = dask.compute(*tasks, scheduler="processes", pool=pool)
                 else:
                     results = dask.compute(*tasks, scheduler=compute_with)
-                for idx, values in zip(batch, results):
-                    sl = region(idx)
+                for idx, values in zip(batch, results, strict=True):
+                    sl = _region(offsets, idx)
                     with ncio.locked():
-                        for target, value in zip(targets, values):
+                        for target, value in zip(targets, values, strict=True):
                             target[sl] = np.asarray(value)
                     if checksums is not None:
-                        for name, value in zip(group, values):
+                        for name, value in zip(group, values, strict=True):
                             checksums.add(name, np.asarray(value), [s.start for s in sl])
                     bar()

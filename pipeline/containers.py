@@ -93,7 +93,8 @@ def _cutoff(topo, factor: float):
         return None, "none in the metadata (Nyquist)" if not params else "not determined from the metadata (Nyquist)"
     kind = "tip radius" if "tip_radius" in params else "resolution"
     given = params.get("tip_radius") or params.get("resolution") or {}
-    return float(length) * factor, f"{kind} {given.get('value')} {given.get('unit')} (SurfaceTopography short_reliability_cutoff)"
+    return float(length) * factor, (f"{kind} {given.get('value')} {given.get('unit')} "
+                                    "(SurfaceTopography short_reliability_cutoff)")
 
 
 def _measurement(container, index: int, name: str, datafile: str, members: set, path: Path, key: str):
@@ -110,8 +111,8 @@ def _measurement(container, index: int, name: str, datafile: str, members: set, 
             heights = topo.heights()
         except (CannotDetectFileFormat, UnknownFileFormat) as exc:
             tried = ", ".join(re.findall(r"tried (\w+)Reader", str(exc))[:6]) or "all readers"
-            raise _fail(path, key, f"{where}: unknown or unsupported file format (SurfaceTopography tried {tried}, ...)") \
-                from None
+            raise _fail(path, key, f"{where}: unknown or unsupported file format (SurfaceTopography tried "
+                                   f"{tried}, ...)") from None
         except Exception as exc:  # noqa: BLE001 - readers of damaged files raise all sorts of errors
             text = " ".join(str(exc).split())
             if "physical_sizes" in text:
@@ -132,9 +133,10 @@ def _measurement(container, index: int, name: str, datafile: str, members: set, 
         raise _fail(path, key, f"{where}: cannot evaluate the reliability cutoff from the instrument metadata "
                                f"({exc.__class__.__name__}: {str(exc)[:120]})") from None
     info = topo.info or {}
-    meta = {"measurement": name, "datafile": datafile, "unit": str(unit), "detrend_mode": info.get("detrend_mode"), "height_scale": info.get("height_scale"),
-            "instrument": _plain(info.get("instrument")), "reliability_cutoff_m": cutoff,
-            "reliability_cutoff_source": source, "notes": [str(w.message)[:200] for w in caught if issubclass(w.category, UserWarning)]}
+    meta = {"measurement": name, "datafile": datafile, "unit": str(unit), "detrend_mode": info.get("detrend_mode"),
+            "height_scale": info.get("height_scale"), "instrument": _plain(info.get("instrument")),
+            "reliability_cutoff_m": cutoff, "reliability_cutoff_source": source,
+            "notes": [str(w.message)[:200] for w in caught if issubclass(w.category, UserWarning)]}
     sizes = tuple(float(s) * factor for s in np.atleast_1d(topo.physical_sizes))
     return Topography(path=Path(f"{path}[{name}]"), heights=heights, physical_sizes=sizes,
                       periodic=bool(topo.is_periodic), unit=str(unit), format="contact.engineering container",
@@ -171,7 +173,7 @@ def read_container(path: Path, *, key: str = "surface", surface: str | None = No
                                "from several measurements (scales): add measurements, or unzip the container and give "
                                "that file as kind = 'topography'")
     out = Container(path=path, surface=name)
-    for i, (label, datafile) in enumerate(zip(labels, datafiles)):
+    for i, (label, datafile) in enumerate(zip(labels, datafiles, strict=False)):
         out.measurements.append(_measurement(container, i, label, datafile, in_archive, path, key))
     return out
 

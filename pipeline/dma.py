@@ -59,12 +59,13 @@ def _sweeps(T: np.ndarray, lines: np.ndarray, tolerance: float, path) -> np.ndar
         if abs(T[i] - T[starts[-1]]) > tolerance:
             starts.append(i)
     bounds = np.append(starts, T.size)
-    means = np.array([T[a:b].mean() for a, b in zip(bounds[:-1], bounds[1:])])
+    means = np.array([T[a:b].mean() for a, b in zip(bounds[:-1], bounds[1:], strict=True)])
     for j in range(1, means.size):
         close = np.flatnonzero(np.abs(means[:j] - means[j]) <= tolerance)
         if close.size:
-            raise UserError(f"a second sweep at T = {means[j]:.6g} K (the sweep from line {lines[starts[close[0]]]} has "
-                            f"{means[close[0]]:.6g} K): merge them or raise the temperature tolerance",
+            raise UserError(f"a second sweep at T = {means[j]:.6g} K (the sweep from line "
+                            f"{lines[starts[close[0]]]} has {means[close[0]]:.6g} K): merge them or raise the "
+                            "temperature tolerance",
                             file=str(path), key=f"line {lines[starts[j]]}")
     if means.size < 2:
         raise UserError(f"only one temperature ({means[0]:.6g} K, lines {lines[0]}-{lines[-1]}): a master curve needs "
@@ -106,7 +107,7 @@ def read_dma(path: Path, *, key: str = "modulus", columns=(0, 1, 2, 3), temperat
                         frequency=frequency, loss_from_tan_delta=loss_from_tan_delta)
     T, omega = table.temperature, table.omega
     bounds = _sweeps(T, table.lines, temperature_tolerance, table.path)
-    temperatures = np.array([T[a:b].mean() for a, b in zip(bounds[:-1], bounds[1:])])
+    temperatures = np.array([T[a:b].mean() for a, b in zip(bounds[:-1], bounds[1:], strict=True)])
     order = _order(omega, bounds, table.lines, table.path, temperatures)
     sweep_of_row = np.repeat(np.arange(temperatures.size), np.diff(bounds))
     rank = np.empty(temperatures.size, dtype=int)

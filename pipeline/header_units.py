@@ -53,6 +53,7 @@ def length_units(path: Path, file_unit: str | None, height_unit: str | None, key
         return height, "header", to_m(height, where), to_m(lateral, where)
     if height_unit is None:
         raise UserError("the file does not say the unit of its heights (no unit in the file, no header like "
-                        f"'# x [um]  h [nm]'); set {key}.height_unit (e.g. \"nm\")", file=str(path), key=f"{key}.height_unit")
+                        f"'# x [um]  h [nm]'); set {key}.height_unit (e.g. \"nm\")", file=str(path),
+                        key=f"{key}.height_unit")
     factor = to_m(height_unit, f"{key}.height_unit")
     return height_unit, "scene", factor, factor

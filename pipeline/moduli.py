@@ -65,7 +65,7 @@ def _kelvin(raw, unit: str, target: str, *, key: str) -> np.ndarray:
 def _units(table, columns: dict, scene: dict, tan: bool, key: str) -> dict:
     """The unit of each column (None for tan delta), from the scene (``scene``: unit key -> value)
     or else the header (E'' falls back on E'); a UserError naming the first unknown one."""
-    header = dict(zip(columns, (table.units[c] if table.units else None for c in columns.values())))
+    header = dict(zip(columns, (table.units[c] if table.units else None for c in columns.values()), strict=True))
     units = {name: scene[_UNIT_KEYS[name]] or header[name] for name in columns}
     units["E''"] = None if tan else units["E''"] or units["E'"]
     example = "# T [degC]  f [Hz]  E' [MPa]  E'' [MPa]" if "T" in columns else "# f [Hz]  E' [MPa]  E'' [MPa]"
@@ -96,14 +96,14 @@ def read_moduli(path: Path, *, key: str, columns, temperature: bool, temperature
     if tan and loss_from_tan_delta is None:
         raise TypeError("loss_column 'tan_delta' needs loss_from_tan_delta(storage, tan_delta) from the stage")
     table = read_table(path)
-    columns = dict(zip(names, columns))
+    columns = dict(zip(names, columns, strict=True))
     raw = {name: table.column(index) for name, index in columns.items()}
     scene = {"temperature_unit": temperature_unit, "frequency_unit": frequency_unit, "modulus_unit": modulus_unit}
     units = _units(table, columns, scene, tan, key)
     where = lambda i: f"line {table.lines[i]}"  # noqa: E731
     for name, values in raw.items():
         label = {"T": "temperature", "E''": "tan delta" if tan else "E''"}.get(name, name)
-        first_bad(~np.isfinite(values), lambda i: f"{label} is NaN or infinite", table.path, where)
+        first_bad(~np.isfinite(values), lambda i, label=label: f"{label} is NaN or infinite", table.path, where)
 
     def si(name, target, what, convert=None):  # a unit from the header is blamed on the header line
         unit_key = _UNIT_KEYS[name]
@@ -125,7 +125,8 @@ def read_moduli(path: Path, *, key: str, columns, temperature: bool, temperature
                   f"{f_raw[i + 1]:g})", table.path, lambda i: where(i + 1))
     first_bad(storage <= 0, lambda i: f"storage modulus E' must be positive, got {s_raw[i]:g}", table.path, where)
     loss_name = "tan delta" if tan else "loss modulus E''"
-    first_bad(l_raw < 0 if tan else loss < 0, lambda i: f"{loss_name} must be >= 0, got {l_raw[i]:g}", table.path, where)
+    first_bad(l_raw < 0 if tan else loss < 0, lambda i: f"{loss_name} must be >= 0, got {l_raw[i]:g}",
+              table.path, where)
     kind = "angular" if angular else "cyclic: omega = 2 pi f"
     attrs = {"source_file": str(path), "frequency_column": f"{units['frequency']} ({kind})"}
     if temperature:

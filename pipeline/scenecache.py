@@ -7,8 +7,9 @@ a second: more than a rerun with every result fresh does otherwise. The parsed
 turns the cache off) under a key that covers everything the parse depends on: the scene file's
 bytes and absolute path (relative input paths resolve against it), the preset, and the installed
 roughcontact (its version and the size and modification time of each of its source files, so that
-an edited declaration re-parses); the 200 most recent are kept. A hit whose input files no longer all exist is ignored (the
-parse then says which one is missing). Anything unreadable is simply parsed again.
+an edited declaration re-parses); the 200 most recent are kept. A hit whose input files no longer
+all exist is ignored (the parse then says which one is missing). Anything unreadable is simply
+parsed again.
 """
 
 from __future__ import annotations

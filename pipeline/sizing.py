@@ -48,7 +48,8 @@ class Estimate:
         parts = []
         for dim, (size, key, block) in sorted(self.dims.items(), key=lambda kv: -kv[1][0]):
             n = block if per_block else size
-            parts.append(f"{dim} {n:g}" + (f" ({key})" if key else "") + (" per block" if per_block and block < size else ""))
+            parts.append(f"{dim} {n:g}" + (f" ({key})" if key else "")
+                         + (" per block" if per_block and block < size else ""))
         return " x ".join(parts) or "no dimensions"
 
     def keys(self, per_block: bool = False) -> list[str]:

@@ -7,8 +7,9 @@ hashing, caching, I/O, chunking and scheduling; a stage does none of these.
 
 This module is the whole API a stage module uses (with :mod:`roughcontact.physics` for the
 numbers): :class:`Stage`, :class:`Var`, :class:`FileInput`, :class:`Figure`,
-:class:`StageInput`, :class:`Shape`, :class:`ByKind`, :class:`Upstream`, :class:`Param`, :class:`Section`, :func:`register`,
-:func:`register_section`, :func:`register_params`, :func:`register_coords`, the errors (and
+:class:`StageInput`, :class:`Shape`, :class:`ByKind`, :class:`Upstream`, :class:`Param`,
+:class:`Section`, :func:`register`, :func:`register_section`, :func:`register_params`,
+:func:`register_coords`, the errors (and
 :class:`SceneWarning`) and :func:`readable` (a quantity in SI units as a short string, for
 messages and figures).
 
@@ -35,8 +36,8 @@ from .units import readable
 
 __all__ = [
     "ByKind", "ComputationError", "FileInput", "Figure", "MISSING", "Param", "REQUIRED", "SceneWarning", "Section",
-    "SectionKeys", "Shape", "Stage", "StageInput", "UserError", "Var", "coords", "readable", "register", "register_coords",
-    "register_params", "register_section", "Upstream",
+    "SectionKeys", "Shape", "Stage", "StageInput", "UserError", "Var", "coords", "readable", "register",
+    "register_coords", "register_params", "register_section", "Upstream",
 ]
 
 

@@ -143,9 +143,11 @@ def read_topography(path: Path, *, key: str = "surface", height_unit: str | None
         raise UserError(f"unknown or unsupported topography format (SurfaceTopography tried {tried})",
                         file=str(path)) from None
     except ReadFileError as exc:
-        raise UserError(f"corrupt or truncated file ({exc.__class__.__name__}: {str(exc)[:160]})", file=str(path)) from None
+        raise UserError(f"corrupt or truncated file ({exc.__class__.__name__}: {str(exc)[:160]})",
+                        file=str(path)) from None
     except Exception as exc:  # readers of binary formats raise all sorts of errors on damaged files
-        raise UserError(f"cannot read the topography ({exc.__class__.__name__}: {str(exc)[:160]})", file=str(path)) from None
+        raise UserError(f"cannot read the topography ({exc.__class__.__name__}: {str(exc)[:160]})",
+                        file=str(path)) from None
     if np.ma.isMaskedArray(heights):
         heights = heights.astype(float).filled(np.nan)
     else:

@@ -89,7 +89,8 @@ register_params(
     Param("adhesion_zeta_offset", "quantity", "", default=1e-10, lo=0.0, lo_open=True, hi=1e-2,
           doc="adhesion: smallest zeta - 1 of the Volterra grid (geometric refinement towards zeta = 1)"),
     Param("adhesion_K_min", "quantity", "", default=1e-8, lo=0.0, lo_open=True, hi=1e-3,
-          doc="adhesion: smallest gamma_eff(1)/(F Delta_gamma) taken as attached (the vanishing-hrms continuation point)"),
+          doc="adhesion: smallest gamma_eff(1)/(F Delta_gamma) taken as attached (the vanishing-hrms continuation "
+              "point)"),
     Param("adhesion_tolerance", "quantity", "", default=1e-10, lo=0.0, lo_open=True, hi=1e-3,
           doc="adhesion: tolerance of the root-finding (residual of eq 13 at zeta1; relative in hrms)"),
 )
@@ -103,7 +104,7 @@ register_params(
 def _where(labels, names, bad) -> str:
     """Coordinates of the first failing case, for error messages."""
     i = int(np.flatnonzero(bad)[0])
-    parts = [f"{n}={np.ravel(v)[i] if np.ndim(v) else v}" for n, v in zip(names, labels)]
+    parts = [f"{n}={np.ravel(v)[i] if np.ndim(v) else v}" for n, v in zip(names, labels, strict=True)]
     return ", ".join(parts) or "the only case"
 
 
@@ -221,7 +222,8 @@ def compute_adhesion(inp: StageInput) -> xr.Dataset:
     if "model" in full.dims:  # the full-contact theory and F do not depend on the S_el model
         full, F = full.isel(model=0, drop=True), F.isel(model=0, drop=True)
     ds = xr.Dataset({
-        "gamma_eff_macroscopic": g1, "gamma_eff_full_contact": full, "adhesive_contact_area_ratio": P.isel(zeta=-1, drop=True),
+        "gamma_eff_macroscopic": g1, "gamma_eff_full_contact": full,
+        "adhesive_contact_area_ratio": P.isel(zeta=-1, drop=True),
         "adhesive_area_ratio_zeta": P, "gamma_eff": g, "detachment_stress": sa, "surface_area_factor": F,
     }).assign_coords(model=model)
     ds["delta_gamma"] = xr.DataArray(dg)
@@ -247,7 +249,8 @@ def _vanishing_kernel(K, C1, C2, eta, c0, c1, *, hs, **kwargs):
     Kf = np.broadcast_to(K, shape + K.shape[-1:]).reshape(-1, n)
     B = Kf.shape[0]
     h, status = vanishing_hrms_from_sweep(
-        Kf, np.broadcast_to(C1, shape + C1.shape[-2:]).reshape(B, n, -1), np.broadcast_to(C2, shape + C2.shape[-1:]).reshape(B, -1),
+        Kf, np.broadcast_to(C1, shape + C1.shape[-2:]).reshape(B, n, -1),
+        np.broadcast_to(C2, shape + C2.shape[-1:]).reshape(B, -1),
         *(np.broadcast_to(v, shape).reshape(-1) for v in (eta, c0, c1)), hs, **kwargs)
     return h.reshape(shape), status.reshape(shape)
 
@@ -270,21 +273,26 @@ def _vanishing(ds, psd, c0, c1, q, E_star, dg, nodes, K_min, tol, sigma0, progre
                         progress=progress),
         )
     except ComputationError as exc:
-        cases = ", ".join(f"{d} = {list(np.atleast_1d(K[d].values))}" for d in K.dims if d != "hrms_substrate" and d in K.coords)
-        raise ComputationError(f"adhesion stage, hrms at which adhesion vanishes ({cases or 'one case'}): {exc}") from None
+        cases = ", ".join(f"{d} = {list(np.atleast_1d(K[d].values))}"
+                          for d in K.dims if d != "hrms_substrate" and d in K.coords)
+        raise ComputationError(f"adhesion stage, hrms at which adhesion vanishes ({cases or 'one case'}): "
+                               f"{exc}") from None
     flat = np.ravel(status.values)
     if np.any(flat != 0):
         first = int(np.flatnonzero(flat)[0])
         index = np.unravel_index(first, status.shape) if status.ndim else ()
-        where = ", ".join(f"{d} = {status[d].values[i]:g}" if status[d].dtype.kind == "f" else f"{d} = {status[d].values[i]}"
-                          for d, i in zip(status.dims, index) if d in status.coords)
+        where = ", ".join(f"{d} = {status[d].values[i]:g}" if status[d].dtype.kind == "f"
+                          else f"{d} = {status[d].values[i]}"
+                          for d, i in zip(status.dims, index, strict=True) if d in status.coords)
         more = int(np.count_nonzero(flat)) - 1
         why = (f"still attached at the largest swept substrate hrms {hs.max() * 1e10:.4g} angstrom: extend the sweep"
                if flat[first] == 1 else
-               f"already detached at the smallest swept substrate hrms {hs.min() * 1e10:.4g} angstrom: start the sweep lower")
+               f"already detached at the smallest swept substrate hrms {hs.min() * 1e10:.4g} angstrom: start the "
+               "sweep lower")
         at = f" at {where}" if where else ""
         also = f" (and {more} more case(s))" if more else ""
-        raise UserError(f"cannot find the hrms at which adhesion vanishes{at}{also}: the partial-contact solution is {why}",
+        raise UserError(f"cannot find the hrms at which adhesion vanishes{at}{also}: the partial-contact solution "
+                        f"is {why}",
                         key="adhesion.vanishing_hrms")
     return h
 

@@ -69,7 +69,8 @@ def _on_nominal_stress_grid(da: xr.DataArray) -> xr.DataArray:
     adaptive grid), so that quantiles are taken at fixed sigma."""
     sigma = da["sigma"]
     nominal = sigma.isel(draw=0, drop=True)
-    values = xr.apply_ufunc(lambda x, xp, fp: np.interp(x, xp, fp, left=0.0, right=0.0), nominal, sigma.variable, da.variable,
+    values = xr.apply_ufunc(lambda x, xp, fp: np.interp(x, xp, fp, left=0.0, right=0.0),
+                            nominal, sigma.variable, da.variable,
                             input_core_dims=[["stress_level"]] * 3, output_core_dims=[["stress_level"]],
                             vectorize=True, dask="parallelized", output_dtypes=[float])
     coords = {k: v for k, v in da.coords.items() if k != "sigma"}
@@ -110,7 +111,8 @@ def compute_bands(inp: StageInput) -> xr.Dataset:
     ds = xr.Dataset(out)
     ds.attrs.update(level=level, draws=int(np.size(inp["bands.draws"]) - 1),
                     method="quantiles (linear between order statistics) over draws 1..N of spectra drawn within the "
-                           "measured spectra's statistical band; draw 0 (the measured spectrum) is the nominal prediction")
+                           "measured spectra's statistical band; draw 0 (the measured spectrum) is the nominal "
+                           "prediction")
     return ds
 
 
@@ -131,8 +133,8 @@ register(
                    figure_band_contact_area, outputs=("contact_area_ratio_band",)),
             Figure("bands_separation", "u(p) over the measured band, with its uncertainty band", ("bands",),
                    figure_band_separation, outputs=("mean_separation_band",)),
-            Figure("bands_stress_distribution", "P(sigma) over the measured band, with its uncertainty band", ("bands",),
-                   figure_band_stress, outputs=("stress_distribution_band",)),
+            Figure("bands_stress_distribution", "P(sigma) over the measured band, with its uncertainty band",
+                   ("bands",), figure_band_stress, outputs=("stress_distribution_band",)),
             Figure("bands_friction", "mu(v) with its uncertainty band", ("bands",), figure_band_friction,
                    outputs=("friction_coefficient_band",)),
         ),

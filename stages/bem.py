@@ -48,7 +48,8 @@ register_section(
         "bem",
         (
             Param("grid", "int", default=256, lo=8, hi=8192,
-                  doc="pixels per side of the synthesized periodic map (side L = 2 pi / qL; measured maps keep theirs)"),
+                  doc="pixels per side of the synthesized periodic map (side L = 2 pi / qL; measured maps keep "
+                      "theirs)"),
             Param("realizations", "int", default=4, lo=1, hi=10000,
                   doc="number of random surface pairs (measured maps: one)"),
             Param("seed", "int", default=0, lo=0, doc="random seed (results are reproducible for a given seed)"),
@@ -233,10 +234,10 @@ def _describe(inp: StageInput, ds: xr.Dataset, band: dict) -> None:
     ds.attrs.update({
         "bem_solver": f"tamaas {solver().__version__} PolonskyKeerRey, tolerance {inp['numerics.bem_tolerance']:g}",
         "bem_surfaces": "measured" if measured else "synthesized",
-        "bem_grid_mapping": f"map side L = {'the measured maps side' if measured else '2 pi / qL'} = {band['L']:.6g} m, "
-                            f"{band['n']} x {band['n']} pixels of dx = {band['dx']:.6g} m; roughness on 2 pi / L <= |q| "
-                            f"<= q_cut = {band['q_cut']:.6g} 1/m (set by {band['limit']}; zeta_bem = {band['zeta']:.6g}); "
-                            "theory read at the same zeta",
+        "bem_grid_mapping": f"map side L = {'the measured maps side' if measured else '2 pi / qL'} = "
+                            f"{band['L']:.6g} m, {band['n']} x {band['n']} pixels of dx = {band['dx']:.6g} m; "
+                            f"roughness on 2 pi / L <= |q| <= q_cut = {band['q_cut']:.6g} 1/m (set by "
+                            f"{band['limit']}; zeta_bem = {band['zeta']:.6g}); theory read at the same zeta",
     })
     if measured:
         maps = band["maps"]
@@ -357,10 +358,12 @@ register(
         outputs={
             "bem_contact_area_ratio": Var("1", "relative contact area A/A0 from the BEM (fraction of pixels in "
                                                "contact), per realization"),
-            "bem_mean_gap": Var("m", "mean interfacial separation (map average of the gap) from the BEM, per realization"),
+            "bem_mean_gap": Var("m", "mean interfacial separation (map average of the gap) from the BEM, per "
+                                     "realization"),
             "bem_stress_histogram": Var("1/Pa", "BEM density of the local contact pressure (integrates to A/A0 "
                                                 "within the bins)"),
-            "bem_stress_overflow": Var("1", "fraction of the map in contact at pressures beyond the last histogram bin"),
+            "bem_stress_overflow": Var("1", "fraction of the map in contact at pressures beyond the last histogram "
+                                            "bin"),
             "bem_hrms_combined": Var("m", "rms height of the composite h1 - h2 (synthesized or measured: attribute "
                                           "bem_surfaces) in the BEM band"),
             "bem_rms_slope_combined": Var("1", "rms slope of the composite h1 - h2 (synthesized or measured: attribute "
@@ -371,7 +374,8 @@ register(
             "bem_mean_gap_mean": Var("m", "BEM mean interfacial separation, mean over realizations"),
             "bem_mean_gap_std": Var("m", "BEM mean interfacial separation, standard deviation over realizations "
                                          "(0: a single realization)"),
-            "theory_contact_area_ratio": Var("1", f"A/A0 of the contact stage (eq 19, or contact.correction) {_THEORY}"),
+            "theory_contact_area_ratio": Var("1", "A/A0 of the contact stage (eq 19, or contact.correction) "
+                                                  f"{_THEORY}"),
             "theory_mean_separation": Var("m", f"mean separation of the separation stage (eq 57, with "
                                                f"separation.refinement) {_THEORY}"),
             "theory_variant_contact_area_ratio": Var("1", f"A/A0 of each theory variant (coordinate theory) {_THEORY}"),
@@ -395,6 +399,7 @@ register(
                         ("bem",), figure_bem_comparison),
                  Figure("bem_reduced_pressure", "theory / BEM ratios of every variant against p/(E* g)",
                         ("bem",), figure_bem_reduced_pressure)),
-        doc="Exact FFT-BEM contact (tamaas) on synthesized or measured surface pairs, compared with the theory at the same band.",
+        doc="Exact FFT-BEM contact (tamaas) on synthesized or measured surface pairs, compared with the theory at "
+            "the same band.",
     )
 )

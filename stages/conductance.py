@@ -83,7 +83,8 @@ NAMES = {"thermal": ("thermal_contact_conductance", "thermal_contact_resistance"
          "electrical": ("electrical_contact_conductance", "electrical_contact_resistance")}
 ASSUMPTIONS = ("heat / current only through the real contact (no gas, no radiation, no film or spot resistance), "
                "constant conductivities, small slopes (half-spaces); +inf where the contact stiffness is infinite "
-               "(surfaces that fit exactly, e.g. identical surfaces with eta = 1): the matching resistance is exactly 0")
+               "(surfaces that fit exactly, e.g. identical surfaces with eta = 1): the matching resistance is "
+               "exactly 0")
 
 register(
     Stage(

@@ -25,7 +25,8 @@ register_params(
     "numerics",
     Param("sigma_points", "int", default=401, lo=3, doc="nodes of the stress grid of P(sigma)"),
     Param("sigma_width", "quantity", "", default=8.0, lo=1.0,
-          doc="the stress grid of each (p, zeta, eta) spans max(0, p - sigma_width sqrt(G)) .. p + sigma_width sqrt(G)"),
+          doc="the stress grid of each (p, zeta, eta) spans max(0, p - sigma_width sqrt(G)) .. "
+              "p + sigma_width sqrt(G)"),
 )
 
 
@@ -89,8 +90,8 @@ def describe_contact(inp: StageInput) -> Shape:
     stress = "stress_distribution" in inp.wanted
     work = {"temporaries": 8 * (inp["numerics.sigma_points"] if stress else 2),
             **({"q": inp.upstream["psd"].sizes["q"]} if isinstance(inp["contact.zeta"], str) else {})}
-    lacks = {"G": ("p", "stress_level"), "contact_area_ratio": ("stress_level",), "E_star": ("p", "zeta", "stress_level"),
-             "qL": ("p", "zeta", "stress_level")}
+    lacks = {"G": ("p", "stress_level"), "contact_area_ratio": ("stress_level",),
+             "E_star": ("p", "zeta", "stress_level"), "qL": ("p", "zeta", "stress_level")}
     if not stress:
         return dataclasses.replace(zeta, work=work, lacks=lacks, coupled=("zeta",))
     lacks.update(stress_distribution_mass=("stress_level",), sigma=())  # written with P: its mass, its stress grid
@@ -110,7 +111,8 @@ STAGE = register(
         outputs={
             "G": Var("Pa^2", "Persson's G(zeta) = (pi/4) E*^2 int_qL^(zeta qL) q^3 C dq (eq 17)"),
             "contact_area_ratio": Var("1", "relative contact area A/A0 = erf(p / 2 sqrt G) (eq 19; with "
-                                              "contact.correction: G -> G_eff, attribute 'correction')", tolerance=1e-4),
+                                           "contact.correction: G -> G_eff, attribute 'correction')",
+                                      tolerance=1e-4),
             "E_star": E_STAR,
             "qL": Q_REFERENCE,
             "stress_distribution": Var("1/Pa", "stress distribution P(sigma; p, zeta) (eq 16)", optional=True),

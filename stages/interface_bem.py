@@ -109,7 +109,7 @@ def _solve_exact(inp, band, q, C1, C2, E_star, p_values, eta_values) -> dict:
                                                  / np.where(u_minus > u_plus, u_minus - u_plus, 1.0), np.inf)
         out["area"][:, j, r], out["gap"][:, j, r] = at["area"][n:2 * n], u
         out["flow"][:, j, r] = [float(np.mean(flow_factors(g))) for g in at["gap"][n:2 * n]]
-        known = list(zip(pressures, at["gap"], at["area"]))
+        known = list(zip(pressures, at["gap"], at["area"], strict=True))
         seals = [sealing_bisection(solve, h1, h2, known, axis, inp["numerics.interface_bem_bisections"],
                                    10.0 * E_star) for axis in (0, 1)]
         # the flow stops when neither axis percolates: the larger of the two thresholds

@@ -127,9 +127,11 @@ register(
                                                         "(Persson & Yang 2008)", attrs={"formula": FLOW + "u1^3"},
                                                tolerance=1e-4),
             "leak_rate_effective_medium": Var("m^3/s", "leak rate of the seal, effective-medium theory "
-                                                       "(Lorenz & Persson 2010)", attrs={"formula": FLOW + "Bruggeman"}),
+                                                       "(Lorenz & Persson 2010)",
+                                              attrs={"formula": FLOW + "Bruggeman"}),
             "flow_factor_critical_junction": Var("m^3", "effective flow factor u1^3 of the critical junction"),
-            "flow_factor_effective_medium": Var("m^3", "effective flow factor sigma of Bruggeman's 2D effective medium"),
+            "flow_factor_effective_medium": Var("m^3", "effective flow factor sigma of Bruggeman's 2D effective "
+                                                       "medium"),
             "critical_magnification": Var("1", "magnification zeta_c at which the non-contact area percolates, "
                                                "A(zeta_c)/A0 = leakage.percolation_area"),
             "critical_gap": Var("m", "separation u1(zeta_c) of the critical constriction"),
@@ -138,7 +140,8 @@ register(
             "sealing_pressure_effective_medium": Var("Pa", "nominal pressure above which Bruggeman's medium does not "
                                                            "conduct (A(q_max)/A0 = 1/2)"),
         },
-        figures=(Figure("leakage", "leak rate of the seal against the contact pressure", ("leakage",), figure_leakage),),
+        figures=(Figure("leakage", "leak rate of the seal against the contact pressure", ("leakage",),
+                        figure_leakage),),
         doc="Leak rate of a seal over (p, eta): critical-junction and effective-medium theories.",
         describe=describe_leakage,
     )

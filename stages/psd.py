@@ -35,7 +35,8 @@ def _check_extent(name: str, spec: dict, spectrum, lo: float, hi: float) -> None
     q_si = spectrum.q
     if spec["extend"] == "none" and (lo < q_si[0] * (1 - 1e-9) or hi > q_si[-1] * (1 + 1e-9)):
         raise UserError(
-            f"the q grid [{lo:.4g}, {hi:.4g}] 1/m reaches outside the file's range [{q_si[0]:.4g}, {q_si[-1]:.4g}] 1/m; "
+            f"the q grid [{lo:.4g}, {hi:.4g}] 1/m reaches outside the file's range "
+            f"[{q_si[0]:.4g}, {q_si[-1]:.4g}] 1/m; "
             f"set grid.q_min/q_max inside it or {name}.extend = 'power_law' or 'zero'",
             file=str(spectrum.path), key=f"{name}.extend")
 
@@ -121,8 +122,8 @@ def _check_coverage(inp: StageInput, topography: Shape | None, lo: float, hi: fl
                                 f"{name}.extend = 'power_law' or 'zero'", key=f"{name}.extend")
     if isinstance(inp["interface.eta"], str) and (topography is None or "coherence" not in topography.variables):
         why = topography.attrs.get("pairing", "") if topography is not None else ""
-        raise UserError("eta = 'measured' needs both surfaces of kind 'topography' (or 'container'), paired on the same "
-                        "grid" + (f" ({why})" if why else ""), key="interface.eta")
+        raise UserError("eta = 'measured' needs both surfaces of kind 'topography' (or 'container'), paired on the "
+                        "same grid" + (f" ({why})" if why else ""), key="interface.eta")
 
 
 def describe_psd(inp: StageInput) -> Shape:
@@ -213,8 +214,10 @@ def compute_psd(inp: StageInput) -> xr.Dataset:
     nominal = {k: v.isel(draw=0, drop=True) if "draw" in v.dims else v for k, v in surfaces.items()}
     combined_err = xr.apply_ufunc(combined_psd_error, nominal["substrate"], nominal["solid"], eta, errors["substrate"],
                                   errors["solid"], eta_err, dask="parallelized", output_dtypes=[float])
-    hrms = xr.apply_ufunc(hrms_from_psd, q, combined, input_core_dims=[["q"], ["q"]], dask="parallelized", output_dtypes=[float])
-    slope = xr.apply_ufunc(rms_slope_from_psd, q, combined, input_core_dims=[["q"], ["q"]], dask="parallelized", output_dtypes=[float])
+    hrms = xr.apply_ufunc(hrms_from_psd, q, combined, input_core_dims=[["q"], ["q"]], dask="parallelized",
+                          output_dtypes=[float])
+    slope = xr.apply_ufunc(rms_slope_from_psd, q, combined, input_core_dims=[["q"], ["q"]], dask="parallelized",
+                           output_dtypes=[float])
     ds = xr.Dataset(
         {"psd_substrate": surfaces["substrate"], "psd_solid": surfaces["solid"], "psd_combined": combined,
          "hrms_combined": hrms, "rms_slope_combined": slope, "psd_substrate_error": errors["substrate"],
@@ -257,7 +260,8 @@ STAGE = register(
             "rms_slope_combined": Var("1", "rms slope of the combined surface (from the PSD)"),
             "psd_substrate_error": Var("m^4", "statistical standard error of C1 on the grid (0: analytic or no errors "
                                        "known)"),
-            "psd_solid_error": Var("m^4", "statistical standard error of C2 on the grid (0: analytic or no errors known)"),
+            "psd_solid_error": Var("m^4", "statistical standard error of C2 on the grid (0: analytic or no errors "
+                                   "known)"),
             "psd_combined_error": Var("m^4", "standard error of the combined PSD, linear propagation of the errors of "
                                       "C1, C2 and eta (measured spectra)"),
         },

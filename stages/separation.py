@@ -169,9 +169,11 @@ def _beta_attrs(refinement: str) -> dict:
              "wang_mueser": " times exp(sum_k c_k Jk(0) / alpha), c_2 = -2/3, c_4 = 5 (11/9 - alpha), "
                             "J2(0) = %.10f, J4(0) = %.10f" % (float(power_J(0.0, 2)), float(power_J(0.0, 4)))}
     return {
-        "formula": "beta = eps exp(-int q^2 C w ln w dq / int q^2 C w dq), eps = exp(-gamma_Euler/2)" + extra[refinement],
+        "formula": ("beta = eps exp(-int q^2 C w ln w dq / int q^2 C w dq), eps = exp(-gamma_Euler/2)"
+                    + extra[refinement]),
         "epsilon": EPSILON,
-        "sign_note": "eq 60 of the seed lost the minus sign in the exponent; restored here (docs/theory.md, section 'Separation')",
+        "sign_note": "eq 60 of the seed lost the minus sign in the exponent; restored here (docs/theory.md, section "
+                     "'Separation')",
         "nan_reason": "beta is NaN where the combined PSD is identically zero up to zeta qL (e.g. eta = 1 with "
                       "identical surfaces): then u = 0 and u0 = 0 at every pressure and p = beta E* exp(-u/u0) "
                       "has no meaning",

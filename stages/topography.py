@@ -49,7 +49,8 @@ def _spectra(p, edges, spec, other=None):
 
 def _describe(p, spec):
     """What the result records about one file (JSON-able)."""
-    d = {k: p[k] for k in ("path", "format", "unit", "size_source", "periodic", "detrend", "window", "analysis", "cutoff")}
+    d = {k: p[k] for k in ("path", "format", "unit", "size_source", "periodic", "detrend", "window", "analysis",
+                           "cutoff")}
     d.update(shape=list(p["h"].shape), sizes_m=list(p["sizes"]), q_range_per_m=[p["q_min"], p["q_max"]],
              rms_height_after_detrend_m=p["rms"])
     if "member" in p:  # a measurement of a contact.engineering container
@@ -64,8 +65,9 @@ def _describe(p, spec):
 def _pairing_problem(a, b) -> str | None:
     """Why file i of the substrate cannot be paired with file i of the solid, or None."""
     if len(a) != len(b):
-        return f"the substrate has {len(a)} file(s) and the solid {len(b)}; pairs need one solid file per substrate file"
-    for i, (p, r) in enumerate(zip(a, b)):
+        return (f"the substrate has {len(a)} file(s) and the solid {len(b)}; pairs need one solid file per "
+                "substrate file")
+    for i, (p, r) in enumerate(zip(a, b, strict=True)):
         if p["h"].shape != r["h"].shape:
             return f"file pair {i}: grids differ ({p['h'].shape} vs {r['h'].shape} points)"
         if not np.allclose(p["sizes"], r["sizes"], rtol=1e-6):
@@ -79,7 +81,7 @@ def _paired_spectra(prepared, specs, edges):
     """Joint spectra of the file pairs: a pair uses the modes reliable in both files; each
     surface keeps its own line-scan H."""
     joint = []
-    for p, r in zip(prepared["substrate"], prepared["solid"]):
+    for p, r in zip(prepared["substrate"], prepared["solid"], strict=True):
         both = dict(p, q_max=min(p["q_max"], r["q_max"]))
         s = _spectra(both, edges, specs["substrate"], r)
         if p["analysis"] == "profiles":
@@ -94,8 +96,9 @@ def _surface_vars(name, spectra, described, bpd):
     common = {"surface": name, "files": json.dumps(described),
               "convention": "Persson, C(q) = (2 pi)^-2 int d^2x <hh> e^-iqx",
               "radial_average": f"mean over Fourier modes with |q| in log bins, {bpd} per decade",
-              "merge": "in each bin, the files (measurements) with modes there averaged with weights n, their effective "
-                       "independent modes (inverse-variance weights); each file's range in 'files' (q_range_per_m)"}
+              "merge": "in each bin, the files (measurements) with modes there averaged with weights n, their "
+                       "effective independent modes (inverse-variance weights); each file's range in 'files' "
+                       "(q_range_per_m)"}
     estimate = ("C / sqrt(n), n the independent modes (Gaussian random-phase statistics; a window's correlation "
                 "of neighbouring modes counted), times the Birge ratio where the files disagree beyond it (chi-square "
                 "test at 1 %); correlated profiles make it an underestimate")
@@ -128,7 +131,8 @@ def describe_topography(inp: StageInput) -> Shape:
     for name in specs:
         other = prepared["solid" if name == "substrate" else "substrate"] if paired else [None] * len(prepared[name])
         lattice = [binned_wavenumbers(p["h"].shape, p["sizes"], edges, min(p["q_max"], r["q_max"]) if r else p["q_max"],
-                                      profiles=p["analysis"] == "profiles") for p, r in zip(prepared[name], other)]
+                                      profiles=p["analysis"] == "profiles")
+                   for p, r in zip(prepared[name], other, strict=True)]
         q, _, n, _ = merge_spectra([{"n": n, "q": q, "C11": np.zeros_like(q)} for n, q in lattice])
         bins |= n > 0
         if np.count_nonzero(n > 0) < 2:
@@ -187,7 +191,8 @@ register(
             **{f"psd_{s}_measured": Var("m^4", f"measured PSD of the {s} (Persson convention)") for s in SURFACES},
             **{f"psd_{s}_measured_error": Var("m^4", f"statistical standard error of the measured PSD of the {s}")
                for s in SURFACES},
-            **{f"q_{s}_measured": Var("1/m", f"mean wavenumber of the {s}'s Fourier modes in the bin") for s in SURFACES},
+            **{f"q_{s}_measured": Var("1/m", f"mean wavenumber of the {s}'s Fourier modes in the bin")
+               for s in SURFACES},
             **{f"modes_{s}": Var("1", f"independent Fourier modes of the {s} in the bin (a window's correlations "
                                       "counted)") for s in SURFACES},
             **{f"psd_{s}_measured_spread": Var("1", f"Birge ratio sqrt(chi^2/(k-1)) of the spread between the {s}'s "

@@ -46,8 +46,10 @@ register_section(
             Param("qL", "quantity", "1/m", default=2e8, lo=0.0, lo_open=True, doc="lowest wavenumber 2 pi / L"),
             Param("rolloff_substrate", "quantity", "", default=4.0, lo=1.0, doc="substrate roll-off q0 / qL"),
             Param("rolloff_solid", "quantity", "", default=2.0, lo=1.0, doc="solid roll-off q0 / qL"),
-            Param("hrms_substrate", "quantity", "m", default=1e-9, lo=0.0, lo_open=True, doc="substrate rms height on the band"),
-            Param("hrms_solid", "quantity", "m", default=0.5e-9, lo=0.0, lo_open=True, doc="solid rms height on the band"),
+            Param("hrms_substrate", "quantity", "m", default=1e-9, lo=0.0, lo_open=True,
+                  doc="substrate rms height on the band"),
+            Param("hrms_solid", "quantity", "m", default=0.5e-9, lo=0.0, lo_open=True,
+                  doc="solid rms height on the band"),
             Param("lattice", "choice", default="cell", choices=("cell", "point"),
                   doc="PSD on the BEM lattice: averaged over each mode's cell (the band's variance exactly) or "
                       "sampled at |k| (a few per cent more long-wavelength roughness)"),
@@ -70,15 +72,16 @@ def check_validation_bem(inp: StageInput) -> None:
 def compute_validation_bem(inp: StageInput) -> xr.Dataset:
     # one task per block, whatever the engine's memory-based chunks: every task is a whole BEM solve
     hurst, band, eta = (_one_per_block(inp.sweep(dim, inp[key])) for dim, key in
-                        (("hurst", "validation.hurst"), ("bandwidth", "validation.bandwidth"), ("eta", "interface.eta")))
+                        (("hurst", "validation.hurst"), ("bandwidth", "validation.bandwidth"),
+                         ("eta", "interface.eta")))
     p_red = inp.sweep("reduced_pressure", np.sort(np.atleast_1d(inp["validation.reduced_pressure"])))
     R = int(inp["validation.realizations"])
     realization = xr.DataArray(np.arange(R), dims=("realization",), coords={"realization": np.arange(R)}).chunk(1)
     n_w = _rungs(inp)
     out = xr.apply_ufunc(
         bem_block, hurst, band, eta, realization, n_w, p_red,
-        kwargs=dict(**case_kwargs(inp), seed=int(inp["validation.seed"]), tolerance=float(inp["numerics.bem_tolerance"]),
-                    lattice=inp["validation.lattice"]),
+        kwargs=dict(**case_kwargs(inp), seed=int(inp["validation.seed"]),
+                    tolerance=float(inp["numerics.bem_tolerance"]), lattice=inp["validation.lattice"]),
         input_core_dims=[[], [], [], [], [], ["reduced_pressure"]], output_core_dims=[["reduced_pressure", "field"]],
         dask="parallelized", output_dtypes=[float], dask_gufunc_kwargs={"output_sizes": {"field": len(FIELDS)}},
     )
@@ -89,9 +92,9 @@ def compute_validation_bem(inp: StageInput) -> xr.Dataset:
     if "bandwidth" in ds.dims and "pixels_per_wavelength" in ds.dims:
         ds = ds.assign_coords(grid=(("bandwidth", "pixels_per_wavelength"), grid))
     ds.attrs.update({"validation_lattice": inp["validation.lattice"], "validation_seed": int(inp["validation.seed"]),
-                     "validation_synthesis": "substrate and solid self-affine with H on qL..bandwidth qL, roll-offs and "
-                                             "hrms as the attributes say; noise from (seed, realization, bandwidth): the "
-                                             "same surfaces on every rung, for every H and eta"})
+                     "validation_synthesis": "substrate and solid self-affine with H on qL..bandwidth qL, roll-offs "
+                                             "and hrms as the attributes say; noise from (seed, realization, "
+                                             "bandwidth): the same surfaces on every rung, for every H and eta"})
     return ds
 
 
@@ -162,7 +165,7 @@ register(
                         ("validation",), figure_kappa),
                  Figure("validation_separation", "mean separation, theory / BEM per variant, against p/(E* g)",
                         ("validation",), figure_separation_ratio)),
-        doc="Theory variants against the BEM: extrapolated BEM area and its error bar, the variants on the same spectra, "
-            "and the deviation table.",
+        doc="Theory variants against the BEM: extrapolated BEM area and its error bar, the variants on the same "
+            "spectra, and the deviation table.",
     )
 )

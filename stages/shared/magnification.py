@@ -64,7 +64,8 @@ def zeta_values(inp, q: np.ndarray) -> np.ndarray:
 
 def _check_zeta(zeta: np.ndarray, top: float) -> None:
     if np.any(zeta > top * (1 + 1e-12)):
-        raise UserError(f"magnification {zeta.max():g} beyond the q grid (zeta <= q_max/qL = {top:.6g})", key="contact.zeta")
+        raise UserError(f"magnification {zeta.max():g} beyond the q grid (zeta <= q_max/qL = {top:.6g})",
+                        key="contact.zeta")
 
 
 def zeta_shape(inp, psd) -> Shape:
@@ -75,7 +76,8 @@ def zeta_shape(inp, psd) -> Shape:
     if isinstance(zeta, str):
         q = psd.coords.get("q")
         return Shape(sizes={"zeta": int(psd.sizes["q"])}, coords={"zeta": q / q[0]} if q is not None else {},
-                     keys={"zeta": "numerics.points_per_decade"}, approximate=("zeta",) if "q" in psd.approximate else ())
+                     keys={"zeta": "numerics.points_per_decade"},
+                     approximate=("zeta",) if "q" in psd.approximate else ())
     zeta = np.atleast_1d(np.asarray(zeta, dtype=float))
     lo, hi = psd.ranges["q"]
     _check_zeta(zeta, hi / lo)
@@ -103,12 +105,13 @@ def scope_check(bands, qL: float, source: str, zeta, coupled: bool, n_rough: int
     lost = {n: b for n, b in bands.items() if not b.spans_grid and (b.lo > top * (1 + 1e-9) or b.hi < qL * (1 - 1e-9))}
     if not lost:
         return
-    parts = [f"the {n}'s roughness ({b.key}: {wavenumber_text(b.lo)} to {wavenumber_text(b.hi)} 1/m) is outside that range"
-             for n, b in lost.items()]
+    parts = [f"the {n}'s roughness ({b.key}: {wavenumber_text(b.lo)} to {wavenumber_text(b.hi)} 1/m) is outside "
+             "that range" for n, b in lost.items()]
     need = max(b.lo for b in lost.values()) / qL
-    fix = (f"Raise contact.zeta to at least {wavenumber_text(need)} (or \"all\") or set grid.q_min, the system's lowest wavenumber "
-           f"2 pi/L" if all(b.hi >= qL for b in lost.values()) else "Lower grid.q_min")
-    where = f"contact.zeta up to {np.max(zeta):g} sees q from qL = {wavenumber_text(qL)} to {wavenumber_text(top)} 1/m (qL: {source})"
+    fix = (f"Raise contact.zeta to at least {wavenumber_text(need)} (or \"all\") or set grid.q_min, the system's "
+           f"lowest wavenumber 2 pi/L" if all(b.hi >= qL for b in lost.values()) else "Lower grid.q_min")
+    where = (f"contact.zeta up to {np.max(zeta):g} sees q from qL = {wavenumber_text(qL)} to {wavenumber_text(top)} "
+             f"1/m (qL: {source})")
     if len(lost) == n_rough:
         raise UserError(f"{where}; {'; '.join(parts)}: no roughness is left. {fix}", key="contact.zeta")
     if coupled:

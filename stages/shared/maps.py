@@ -61,12 +61,14 @@ def prepare_map(name: str, spec: dict, topo, index: int) -> dict:
     if bad.any():
         first = tuple(int(i) for i in np.argwhere(bad)[0])
         raise UserError(
-            f"{int(bad.sum())} of {h.size} heights are missing (NaN or masked), first at index {first}; the FFT needs a "
-            "complete grid: fill them (interpolate) or crop the map in the instrument software", file=path, key=key)
+            f"{int(bad.sum())} of {h.size} heights are missing (NaN or masked), first at index {first}; the FFT "
+            "needs a complete grid: fill them (interpolate) or crop the map in the instrument software",
+            file=path, key=key)
     if not np.all(np.isfinite(h)):
         raise UserError("infinite height values", file=path, key=key)
     if h.ndim not in (1, 2) or min(h.shape) < (8 if h.ndim == 1 else 4) or h.shape[0] < 8:
-        raise UserError(f"too few points for a spectrum (shape {h.shape}; needs at least 8 along x)", file=path, key=key)
+        raise UserError(f"too few points for a spectrum (shape {h.shape}; needs at least 8 along x)",
+                        file=path, key=key)
     periodic = spec.get("periodic") if spec.get("periodic") is not None else topo.periodic
     detrend_how = spec.get("detrend") or ("mean" if periodic else "plane")
     window = spec.get("window") or ("none" if periodic else "hann")
@@ -110,7 +112,7 @@ def process_map(p: dict, spec: dict) -> dict:
             h *= hann_window_1d(h.shape[0]).reshape((-1,) + (1,) * (h.ndim - 1))
         else:
             h *= hann_window_radial(*h.shape, *sizes)
-    dx = [s / n for s, n in zip(sizes, h.shape)]
+    dx = [s / n for s, n in zip(sizes, h.shape, strict=False)]
     q_max = np.pi / (dx[0] if profiles else min(dx))
     why = "Nyquist pi/dx"
     for qc, text in _cutoffs(p, spec):
@@ -173,7 +175,8 @@ def measured_coherence_on_grid(ds: xr.Dataset, q_grid: np.ndarray) -> np.ndarray
 # Measured maps as the BEM's surfaces (stage bem)
 # ----------------------------------------------------------------------------------------
 
-_SYNTHESIZE_INSTEAD = "; or set bem.surfaces = 'synthesized' to compare on random periodic surfaces with the measured spectra"
+_SYNTHESIZE_INSTEAD = ("; or set bem.surfaces = 'synthesized' to compare on random periodic surfaces with the "
+                       "measured spectra")
 
 
 def map_surfaces(inp) -> tuple[str, ...]:
@@ -259,9 +262,9 @@ def measured_maps(inp, names: tuple[str, ...]) -> dict:
     if len(prepared) == 2:
         a, b = prepared["substrate"], prepared["solid"]
         if a["h"].shape != b["h"].shape:
-            raise UserError(f"the two maps are not on one grid: the substrate has {a['h'].shape[0]} x {a['h'].shape[1]} "
-                            f"points, the solid {b['h'].shape[0]} x {b['h'].shape[1]}" + _SYNTHESIZE_INSTEAD,
-                            key="solid.files")
+            raise UserError(f"the two maps are not on one grid: the substrate has {a['h'].shape[0]} x "
+                            f"{a['h'].shape[1]} points, the solid {b['h'].shape[0]} x {b['h'].shape[1]}"
+                            + _SYNTHESIZE_INSTEAD, key="solid.files")
         if not np.isclose(a["sizes"][0], b["sizes"][0], rtol=1e-6):
             raise UserError(f"the two maps are not on one grid: the substrate is {a['sizes'][0]:.6g} m wide, the solid "
                             f"{b['sizes'][0]:.6g} m" + _SYNTHESIZE_INSTEAD, key="solid.size_x")

@@ -21,7 +21,8 @@ from roughcontact.stage import Param, Var
 
 #: keys of ``[modulus] kind = "dma"``
 DMA_PARAMS = (
-    Param("sweeps", "path", doc="text/CSV file of DMA frequency sweeps: temperature, frequency, E', E'' (or tan delta)"),
+    Param("sweeps", "path",
+          doc="text/CSV file of DMA frequency sweeps: temperature, frequency, E', E'' (or tan delta)"),
     Param("columns", "intlist", default=(0, 1, 2, 3), lo=0, doc="0-based columns of T, frequency, E', E''/tan delta"),
     Param("loss_column", "choice", default="loss_modulus", choices=("loss_modulus", "tan_delta"),
           doc="what the fourth column holds"),
@@ -34,7 +35,8 @@ DMA_PARAMS = (
           doc="rows within this of a sweep's first temperature belong to the sweep"),
     Param("fit", "choice", default="wlf", choices=("wlf", "free"),
           doc="horizontal shifts: WLF fitted to the data (wlf) or one shift per sweep, then WLF fitted to them (free)"),
-    Param("vertical_fit", "choice", default="none", choices=("none", "free"), doc="vertical shifts b_T: none or one per sweep"),
+    Param("vertical_fit", "choice", default="none", choices=("none", "free"),
+          doc="vertical shifts b_T: none or one per sweep"),
     Param("kk_tolerance", "quantity", "", default=0.05, lo=0.0, lo_open=True,
           doc="rms relative deviation of E' from its Kramers-Kronig reconstruction above which a sweep is flagged"),
     Param("spectrum_per_decade", "int", default=4, lo=1, doc="relaxation times per decade of the fitted spectrum"),
@@ -100,9 +102,9 @@ def master_curve(spec, data) -> MasterCurve:
     bad = np.flatnonzero(kk > spec["kk_tolerance"])
     if bad.size:
         listed = ", ".join(f"{T[j] - 273.15:.4g} °C ({100 * kk[j]:.3g} %)" for j in bad)
-        warnings.warn(f"{data.path}: E' does not follow from E'' by Kramers-Kronig within {100 * spec['kk_tolerance']:g} % "
-                      f"(rms) at T = {listed}: the data there are not causal or do not superpose", UserWarning,
-                      stacklevel=2)
+        warnings.warn(f"{data.path}: E' does not follow from E'' by Kramers-Kronig within "
+                      f"{100 * spec['kk_tolerance']:g} % (rms) at T = {listed}: the data there are not causal or do "
+                      "not superpose", UserWarning, stacklevel=2)
     return MasterCurve(float(T_ref), shifts.C1, shifts.C2, T, shifts.log10_aT, shifts.log10_bT, shifts.residual,
                        shifts.wlf_residual, kk, E0, moduli, times, fit_residual, reduced, storage, loss,
                        T[data.sweep])

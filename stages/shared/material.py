@@ -29,7 +29,8 @@ register_section(
 register_section(
     Section(
         "load",
-        (Param("p", "sweep", "Pa", lo=0.0, lo_open=True, doc="nominal pressure; a list or {from, to, num} is a sweep"),),
+        (Param("p", "sweep", "Pa", lo=0.0, lo_open=True,
+               doc="nominal pressure; a list or {from, to, num} is a sweep"),),
         doc="the nominal squeezing pressure",
     )
 )

@@ -82,7 +82,8 @@ def _check_surface(values: dict, key: str) -> None:
 SELF_AFFINE_PARAMS = (
     Param("H", "quantity", "", lo=0.0, hi=1.0, lo_open=True, doc="Hurst exponent, 0 < H <= 1"),
     Param("qL", "quantity", "1/m", lo=0.0, lo_open=True, doc="lowest wavenumber 2 pi / L"),
-    Param("q0", "quantity", "1/m", default=None, lo=0.0, lo_open=True, doc="roll-off wavenumber (default qL: no roll-off)"),
+    Param("q0", "quantity", "1/m", default=None, lo=0.0, lo_open=True,
+          doc="roll-off wavenumber (default qL: no roll-off)"),
     Param("q1", "quantity", "1/m", lo=0.0, lo_open=True, doc="upper cut-off wavenumber"),
     Param("hrms", "sweep", "m", default=None, lo=0.0, lo_open=True, dim="hrms_{section}",
           doc="rms roughness; a list is a sweep (dimension hrms_substrate / hrms_solid)"),
@@ -108,14 +109,18 @@ DETREND_DEGREE = {"mean": 0, "plane": 1, "curvature": 2}
 TOPOGRAPHY_PARAMS = (
     Param("files", "paths", doc="height map(s) or line scan(s) of this surface, any format SurfaceTopography reads; "
           "several files (e.g. several magnifications) are merged onto one q grid"),
-    Param("height_unit", "str", default=None, doc="unit of heights (and sizes) for files that do not say (npy; text without a header "
-          "like '# x [um]  h [nm]', whose units are used)"),
-    Param("size_x", "quantity", "m", default=None, lo=0.0, lo_open=True, doc="scan length along x, for files that do not say"),
+    Param("height_unit", "str", default=None,
+          doc="unit of heights (and sizes) for files that do not say (npy; text without a header "
+              "like '# x [um]  h [nm]', whose units are used)"),
+    Param("size_x", "quantity", "m", default=None, lo=0.0, lo_open=True,
+          doc="scan length along x, for files that do not say"),
     Param("size_y", "quantity", "m", default=None, lo=0.0, lo_open=True,
           doc="scan length along y, for files that do not say (default: square pixels)"),
-    Param("periodic", "bool", default=None, doc="treat the data as periodic (default: as the file says; measurements are not)"),
+    Param("periodic", "bool", default=None,
+          doc="treat the data as periodic (default: as the file says; measurements are not)"),
     Param("analysis", "choice", default="area", choices=("area", "profiles"),
-          doc="maps: 2D radial PSD ('area') or average of the line scans along x ('profiles'); line scans: always profiles"),
+          doc="maps: 2D radial PSD ('area') or average of the line scans along x ('profiles'); line scans: always "
+              "profiles"),
     Param("detrend", "choice", default=None, choices=tuple(DETREND_DEGREE),
           doc="polynomial removed before the FFT (default: mean if periodic, else plane)"),
     Param("window", "choice", default=None, choices=("hann", "none"),
@@ -132,11 +137,13 @@ TOPOGRAPHY_PARAMS = (
 )
 
 CONTAINER_PARAMS = (
-    Param("container", "path", doc="contact.engineering container (ZIP with the measurements and index.json / meta.yml); "
-          "units, sizes, height scale, detrending and reliability cutoffs come from its metadata"),
+    Param("container", "path",
+          doc="contact.engineering container (ZIP with the measurements and index.json / meta.yml); "
+              "units, sizes, height scale, detrending and reliability cutoffs come from its metadata"),
     Param("surface", "str", default=None, doc="which surface of the container (by name) when it holds several"),
     Param("detrend", "choice", default=None, choices=tuple(DETREND_DEGREE),
-          doc="polynomial removed before the FFT (default: the measurement's detrend_mode, else mean if periodic, else plane)"),
+          doc="polynomial removed before the FFT (default: the measurement's detrend_mode, else mean if periodic, "
+              "else plane)"),
     *(p for p in TOPOGRAPHY_PARAMS if p.name in ("analysis", "window", "hurst", "extend")),
 )
 

@@ -100,7 +100,7 @@ def _theory(inp: StageInput, bem: xr.Dataset, kwargs: dict) -> dict:
     gap, slope = np.empty_like(area), np.empty(sizes)
     lattice = np.empty(sizes + [2, 2])
     for idx in np.ndindex(*sizes):
-        H, zeta, eta = (float(coord[d][i]) for d, i in zip(CASE, idx))
+        H, zeta, eta = (float(coord[d][i]) for d, i in zip(CASE, idx, strict=True))
         q, C1, C2 = case_spectra(H, zeta, kwargs["qL"], kwargs["rolloffs"], kwargs["hrms"], kwargs["points_per_decade"])
         C = psd_combined(C1, C2, eta)
         p, slope[idx] = case_pressures(p_red, H, zeta, eta, **kwargs)

@@ -39,7 +39,8 @@ OUT = Path(__file__).resolve().parent  # next to this maker
 H, Q0, N, ETA = 0.8, 2 * np.pi / 20e-6, 128, 0.6
 SCALES = (  # name, side (m), crop factor, unit, height scale, instrument, file format
     ("profilometer 80 um", 80e-6, 4, "um", None,
-     {"name": "optical profilometer", "type": "microscope-based", "parameters": {"resolution": {"value": 1.5, "unit": "um"}}},
+     {"name": "optical profilometer", "type": "microscope-based",
+      "parameters": {"resolution": {"value": 1.5, "unit": "um"}}},
      "x3p"),
     ("AFM 10 um", 10e-6, 4, "nm", 0.05,
      {"name": "AFM", "type": "contact-based", "parameters": {"tip_radius": {"value": 40, "unit": "nm"}}}, "npy"),
@@ -110,7 +111,7 @@ def example_measurements(rng, hrms: float, partner=None, eta: float = ETA) -> li
         q = wavevectors(n, n, big, big)
         norm = hrms**2 / np.sum(self_affine(q, H, Q0, 1.0) * (2 * np.pi / big) ** 2)
 
-        def psd(q):
+        def psd(q, norm=norm):
             return self_affine(q, H, Q0, norm)
 
         h = synthesize(psd, n, n, big, big, rng)

@@ -39,7 +39,8 @@ def main() -> None:
         Ep = Ep * (1 + 0.01 * rng.standard_normal(freqs.size))
         Epp = Epp * (1 + 0.01 * rng.standard_normal(freqs.size))
         jitter = 0.1 * rng.uniform(-1, 1, freqs.size)
-        rows += [f"{T + dT:7.2f}  {f:9.4g}  {a / 1e6:11.6g}  {b / 1e6:11.6g}" for dT, f, a, b in zip(jitter, freqs, Ep, Epp)]
+        rows += [f"{T + dT:7.2f}  {f:9.4g}  {a / 1e6:11.6g}  {b / 1e6:11.6g}"
+                 for dT, f, a, b in zip(jitter, freqs, Ep, Epp, strict=True)]
     OUT.write_text("\n".join(rows) + "\n")
     print(f"wrote {OUT} ({temps.size} sweeps x {freqs.size} frequencies)")
 
