@@ -324,7 +324,8 @@ def extrapolate_modulus(omega, omega_lo, omega_hi, storage_lo, loss_lo, storage_
     above = omega > omega_hi
     with np.errstate(divide="ignore", invalid="ignore"):
         storage = np.where(below, storage_lo, np.where(above, storage_hi, np.nan))
-        loss = np.where(below, loss_lo * omega / omega_lo, np.where(above, loss_hi * omega_hi / np.where(above, omega, 1.0), np.nan))
+        loss_above = loss_hi * omega_hi / np.where(above, omega, 1.0)
+        loss = np.where(below, loss_lo * omega / omega_lo, np.where(above, loss_above, np.nan))
     return storage, loss, ~(below | above)
 
 
