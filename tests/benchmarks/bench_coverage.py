@@ -138,7 +138,9 @@ def main():
         hits = ~misses.any(axis=1)
         error = np.sqrt(0.09 / len(hits))
         H, n, scales = LAYOUTS[layout]
-        print(f"layout {layout}{' (periodic, no window)' if args.periodic else ''}: maps {', '.join(f'{s * 1e6:g} um' for s, _, _ in scales)}, {n} x {n} points, H = {H}; "
+        sides = ", ".join(f"{s * 1e6:g} um" for s, _, _ in scales)
+        print(f"layout {layout}{' (periodic, no window)' if args.periodic else ''}: maps {sides}, {n} x {n} points, "
+              f"H = {H}; "
               f"{len(hits)} containers, {args.draws} draws; modes of the coarsest map's two lowest bins (mean): "
               f"{np.mean(coarse, axis=0).round(2)}  ({time.perf_counter() - t0:.0f} s)")
         for k, name in enumerate(names):
