@@ -16,12 +16,14 @@ import xarray as xr
 from roughcontact.physics.estimators import (
     binned_spectra_area,
     binned_spectra_profiles,
+    hurst_from_spectrum,
     log_bin_edges,
     merge_spectra,
     pooled_coherence,
     second_surface_hurst,
 )
 from roughcontact.physics.lattice import binned_wavenumbers
+from roughcontact.physics.spectra import isotropic_factor
 from roughcontact.stage import Figure, Param, Shape, Stage, StageInput, UserError, Var, register, register_params
 
 from .figures.topography import figure_coherence, figure_measured_psd
@@ -45,6 +47,42 @@ def _spectra(p, edges, spec, other=None):
         s = binned_spectra_area(p["h"], p["sizes"][0], p["sizes"][1], edges, p["q_max"], h2)
     s["n"] = s["n"] / mode_factor(p, edges)  # a window correlates neighbouring modes
     return s
+
+
+def _fitted_hurst(name, spec, prepared, edges):
+    """The line scans' H: as given, or fitted to the slope of their spectrum (bins of at least 5
+    modes above 4 times each scan's lowest wavenumber, where its window and detrending bias it);
+    returns the spec with it, and what the result says about it. Maps (no conversion): unchanged."""
+    if not any(p["analysis"] == "profiles" for p in prepared):
+        return spec, None
+    if spec.get("hurst") is not None:
+        return spec, {"value": spec["hurst"], "source": "given", "error": None}
+    spectra = []
+    for p in prepared:
+        if p["analysis"] == "profiles":
+            s = _spectra(p, edges, dict(spec, hurst=0.5))
+            spectra.append(dict(s, n=np.where(s["q"] >= 4.0 * p["q_min"], s["n"], 0.0)))
+    q, C, n, _ = merge_spectra(spectra)
+    H, err, used = hurst_from_spectrum(q, C, n)
+    if not np.isfinite(H) or not 0.0 < H <= 1.0:
+        why = f"fitted H = {H:.3g} is outside (0, 1]" if np.isfinite(H) else f"only {used} bin(s) with 5 modes or more"
+        raise UserError(f"the line scans' Hurst exponent cannot be fitted to their spectrum ({why}); give "
+                        f"{name}.hurst for the conversion of the 1D spectra to the isotropic PSD",
+                        key=f"{name}.hurst")
+    return dict(spec, hurst=H), {"value": H, "source": f"fitted to the slope of the scans' spectrum over {used} bins",
+                                 "error": err}
+
+
+def _hurst_note(hurst) -> str:
+    """The attribute saying which H converted the line scans and that its uncertainty is not in the bands."""
+    H, err = hurst["value"], hurst["error"]
+    if err is None:
+        return (f"H = {H:g}, given; the conversion C = c(H) C1D / q is exact only for an isotropic self-affine surface "
+                "with that H; its uncertainty is not in the errors or the bands")
+    dc = abs(float(np.log(isotropic_factor(min(H + err, 1.0)) / isotropic_factor(max(H - err, 1e-3))))) / 2.0
+    return (f"H = {H:.3f} +- {err:.3f}, {hurst['source']}; c(H) is uncertain by {100 * dc:.1f} % (common to every bin "
+            "the line scans carry), which is NOT in the errors or the bands (the draws keep H fixed); the error of H "
+            "counts the profiles as independent and so is a lower bound")
 
 
 def _describe(p, spec):
@@ -152,6 +190,9 @@ def describe_topography(inp: StageInput) -> Shape:
 def compute_topography(inp: StageInput) -> xr.Dataset:
     bpd = inp["numerics.topography_bins_per_decade"]
     specs, prepared, edges, pair_note = _prepared(inp)
+    hursts = {}
+    for name in specs:
+        specs[name], hursts[name] = _fitted_hurst(name, specs[name], prepared[name], edges)
     centres = np.sqrt(edges[1:] * edges[:-1])
     paired = len(specs) == 2 and pair_note is None
     if paired:
@@ -162,6 +203,8 @@ def compute_topography(inp: StageInput) -> xr.Dataset:
     for name in specs:
         described = [_describe(p, specs[name]) for p in prepared[name]]
         found, has = _surface_vars(name, spectra[name], described, bpd)
+        if hursts[name] is not None:
+            found[f"psd_{name}_measured"][1]["line_scan_hurst"] = _hurst_note(hursts[name])
         data_vars.update(found)
         keep |= has
     if paired:
@@ -179,7 +222,7 @@ def compute_topography(inp: StageInput) -> xr.Dataset:
 register(
     Stage(
         name="topography",
-        version="2",
+        version="3",
         compute=compute_topography,
         # of a measured surface the map keys and the line-scan H; of any other surface only its kind
         reads=(*surface_reads({"topography": (*MAP_KEYS, "hurst"), "container": (*CONTAINER_KEYS, "hurst"), "*": ()}),

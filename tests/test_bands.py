@@ -61,6 +61,35 @@ def test_draws_are_centred_on_the_measurement_with_the_inverse_gamma_spread():
     assert not np.array_equal(psd_draws(C, n, np.array([5]), 7, 2)[0], draws[5])  # another surface, another stream
 
 
+def test_few_mode_bins_follow_the_chi_square_law_and_their_draws_cover_one_bin():
+    """A periodic map's bin of n modes: C_hat / C is chi-square with 2n degrees of freedom over
+    2n (mean 1, variance 1/n; 4000 maps, n = 2 and 4); the 90 % interval of the draws
+    C n / Gamma(n + 1) of one such bin contains C with the probability F_2n(q95) - F_2n(q05)
+    of that law (0.79 at n = 2: the truth is above a single few-mode bin's band 20 % of the time;
+    sums of many bins are not, see docs/measured-data.md)."""
+    rng = np.random.default_rng(11)
+    side, npts = 1e-6, 16
+    edges = log_bin_edges(2 * np.pi / side * 0.99, 2 * np.pi / side * 2.01, 20)
+    ratios = []
+    for _ in range(4000):
+        s = binned_spectra_area(synthesize(_psd, npts, npts, side, side, rng), side, side, edges, np.pi * npts / side)
+        ok = s["n"] > 0
+        ratios.append(s["C11"][ok] / _psd(s["q"][ok]))
+    ratios, n = np.array(ratios), s["n"][s["n"] > 0]
+    assert set(n) == {2.0, 4.0}
+    for k, nk in enumerate(n):
+        assert abs(ratios[:, k].mean() - 1) < 4 / np.sqrt(nk * ratios.shape[0])
+        assert ratios[:, k].var() == pytest.approx(1 / nk, rel=0.1)
+        assert scipy.stats.kstest(2 * nk * ratios[:, k], scipy.stats.chi2(2 * nk).cdf).pvalue > 1e-3
+    n2 = 2.0
+    draws = psd_draws(np.ones(4000), np.full(4000, n2), np.arange(1, 201), seed=3, stream=1) * ratios[:, 0]
+    lo, hi = np.quantile(draws, [0.05, 0.95], axis=0)
+    law = scipy.stats.chi2(2 * n2)
+    q05, q95 = scipy.stats.gamma(n2 + 1).ppf([0.05, 0.95])
+    expected = law.cdf(2 * q95) - law.cdf(2 * q05)
+    assert np.mean((lo <= 1) & (1 <= hi)) == pytest.approx(expected, abs=0.03)
+
+
 def test_interpolation_of_noisy_bins_is_made_unbiased():
     """Bins of a power law with Gamma(n)/n noise, interpolated log-log: their mean on the grid
     is biased low by about t(1 - t)/n between bins; with interpolation_unbiasing it equals the
@@ -237,3 +266,52 @@ def test_draws_must_be_a_whole_number():
         scene.from_dict(raw)
     assert scene.from_dict({"name": "e", "bands": {"draws": 4}}).sweep_sizes()["draw"] == 5
     assert "draw" not in scene.from_dict({"name": "e"}).sweep_sizes()
+
+
+# -- line scans: the Hurst exponent of the conversion -----------------------------------------
+
+
+def _line_scans(tmp_path, H, seed=0, n=512, profiles=32):
+    """Profiles (along x, 10 um) of an isotropic self-affine surface of Hurst exponent H, saved as
+    a map with one profile per column. The map is synthesized with a finer y lattice than x, so
+    that each profile's 1D spectrum holds every q_y up to well beyond its own Nyquist."""
+    side = 10e-6
+    psd = lambda q: self_affine(q, H, np.pi / side, 1e-33)  # noqa: E731
+    h = synthesize(psd, n, 4 * n, side, side, np.random.default_rng(seed))[:, :: 4 * n // profiles]
+    np.save(tmp_path / f"scan{H}.npy", h)
+    return str(tmp_path / f"scan{H}.npy"), psd
+
+
+@pytest.mark.parametrize("H", [0.8, 0.3])
+def test_line_scans_are_converted_with_the_hurst_exponent_of_their_spectrum(tmp_path, H):
+    """Without a given hurst, H is fitted to the scans' spectrum (within 0.05 of the surface's)
+    and the converted PSD is the surface's within 5 % over the self-affine band; the default
+    H = 0.5 of before made an H = 0.8 surface 15 % low (c(0.5) / c(0.8) = 0.854). The result
+    says which H was used and that its uncertainty is not in the bands."""
+    pytest.importorskip("SurfaceTopography")
+    path, psd = _line_scans(tmp_path, H)
+    surface = {"kind": "topography", "files": path, "height_unit": "m", "size_x": "10 um", "analysis": "profiles",
+               "periodic": True}
+    raw = {"name": "h", "substrate": surface, "material": {"E": "10 MPa", "nu": 0.5}, "load": {"p": "1 MPa"}}
+    res = engine.run(scene.from_dict(raw, tmp_path / "s.toml"), tmp_path / "out", targets=("topography",),
+                     report=engine.Reporter(None))["base"]["topography"]
+    note = res["psd_substrate_measured"].attrs["line_scan_hurst"]
+    fitted = float(note.split("=")[1].split("+-")[0])
+    assert abs(fitted - H) < 0.05 and "NOT in the errors or the bands" in note
+    q, C = res["q_substrate_measured"].values, res["psd_substrate_measured"].values
+    band = (q > 10 * 2 * np.pi / 10e-6) & (q < 0.5 * np.pi * 512 / 10e-6)
+    assert abs(np.mean(C[band] / psd(q[band])) - 1) < 0.05
+    from roughcontact.physics.spectra import isotropic_factor
+
+    assert isotropic_factor(0.5) / isotropic_factor(0.8) == pytest.approx(0.854, abs=1e-3)
+
+
+def test_line_scans_whose_spectrum_gives_no_slope_need_a_given_hurst(tmp_path):
+    pytest.importorskip("SurfaceTopography")
+    np.save(tmp_path / "short.npy", np.random.default_rng(1).standard_normal(16) * 1e-9)
+    surface = {"kind": "topography", "files": str(tmp_path / "short.npy"), "height_unit": "m", "size_x": "1 um"}
+    raw = {"name": "h", "substrate": surface, "material": {"E": "10 MPa", "nu": 0.5}, "load": {"p": "1 MPa"}}
+    with pytest.raises(UserError, match="give substrate.hurst") as info:
+        engine.run(scene.from_dict(raw, tmp_path / "s.toml"), tmp_path / "out", targets=("topography",),
+                   report=engine.Reporter(None))
+    assert info.value.key == "substrate.hurst"
