@@ -59,11 +59,12 @@ def _sweeps(T: np.ndarray, lines: np.ndarray, tolerance: float, path) -> np.ndar
         if abs(T[i] - T[starts[-1]]) > tolerance:
             starts.append(i)
     bounds = np.append(starts, T.size)
-    means = np.array([T[a:b].mean() for a, b in zip(bounds[:-1], bounds[1:])])
+    means = np.array([T[a:b].mean() for a, b in zip(bounds[:-1], bounds[1:], strict=True)])
     for j in range(1, means.size):
         close = np.flatnonzero(np.abs(means[:j] - means[j]) <= tolerance)
         if close.size:
-            raise UserError(f"a second sweep at T = {means[j]:.6g} K (the sweep from line {lines[starts[close[0]]]} has "
+            raise UserError(f"a second sweep at T = {means[j]:.6g} K (the sweep from line "
+                            f"{lines[starts[close[0]]]} has "
                             f"{means[close[0]]:.6g} K): merge them or raise the temperature tolerance",
                             file=str(path), key=f"line {lines[starts[j]]}")
     if means.size < 2:
@@ -96,17 +97,18 @@ def _order(omega, bounds, lines, path, temperatures):
 def read_dma(path: Path, *, key: str = "modulus", columns=(0, 1, 2, 3), temperature_unit: str | None = None,
              frequency_unit: str | None = None, modulus_unit: str | None = None, loss_column: str = "loss_modulus",
              frequency: str = "auto", temperature_tolerance: float = 0.5,
-             loss_from_tan_delta: Callable | None = None) -> DMASweeps:
-    """Read multi-temperature frequency sweeps: a text table with columns ``columns`` = [T,
+             loss_from_tan_delta: Callable | None = None, sheet: str | None = None) -> DMASweeps:
+    """Read multi-temperature frequency sweeps: a text table or spreadsheet (``sheet``) with columns
+    ``columns`` = [T,
     frequency, E', E'' or tan delta], read and checked by :func:`roughcontact.moduli.read_moduli`
     (units, angular or cyclic frequency, ``loss_from_tan_delta``). Rows whose temperature stays
     within ``temperature_tolerance`` (K) of a sweep's first row belong to it."""
     table = read_moduli(path, key=key, columns=columns, temperature=True, temperature_unit=temperature_unit,
                         frequency_unit=frequency_unit, modulus_unit=modulus_unit, loss_column=loss_column,
-                        frequency=frequency, loss_from_tan_delta=loss_from_tan_delta)
+                        frequency=frequency, loss_from_tan_delta=loss_from_tan_delta, sheet=sheet)
     T, omega = table.temperature, table.omega
     bounds = _sweeps(T, table.lines, temperature_tolerance, table.path)
-    temperatures = np.array([T[a:b].mean() for a, b in zip(bounds[:-1], bounds[1:])])
+    temperatures = np.array([T[a:b].mean() for a, b in zip(bounds[:-1], bounds[1:], strict=True)])
     order = _order(omega, bounds, table.lines, table.path, temperatures)
     sweep_of_row = np.repeat(np.arange(temperatures.size), np.diff(bounds))
     rank = np.empty(temperatures.size, dtype=int)

@@ -55,6 +55,7 @@ from .shared.mastercurve import (
     DMA_COORDS,
     DMA_OUTPUTS,
     DMA_PARAMS,
+    check_dma,
     dma_options,
     dma_variables,
     master_curve,
@@ -258,6 +259,8 @@ def check_modulus(inp: StageInput) -> None:
         raise UserError(_NO_SECTION, key="modulus")
     if spec["kind"] != "dma":  # the dma source's shifts are fitted in compute
         _shift_factors(spec, np.atleast_1d(np.asarray(spec["T"], dtype=float)))
+    else:
+        check_dma(spec, inp.files.get("modulus.sweeps"))
 
 
 def compute_modulus(inp: StageInput) -> xr.Dataset:
@@ -353,7 +356,7 @@ def _master_curve_options(params) -> dict:
 register(
     Stage(
         name="modulus",
-        version="2",
+        version="3",
         compute=compute_modulus,
         check=check_modulus,
         reads=("modulus", "numerics.modulus_points_per_decade"),
