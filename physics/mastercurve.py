@@ -127,7 +127,7 @@ def _pair_cost(xa, ya, xb, yb, d, vertical, samples=40):
     return float(np.mean([np.mean((r - off) ** 2) for r in diffs])), off, hi - lo
 
 
-def pair_shift(xa, ya, xb, yb, vertical=False, min_overlap=0.5, step=0.02):
+def pair_shift(xa, ya, xb, yb, vertical=False, min_overlap=0.5, step=0.02, flat_width=0.25):
     """The horizontal shift d (decades) that lays sweep b, at x = log10 omega + d, on its neighbour a.
 
     d minimises the area between the two curves in log-log over their overlap divided by the
@@ -148,14 +148,17 @@ def pair_shift(xa, ya, xb, yb, vertical=False, min_overlap=0.5, step=0.02):
         Remove the best common vertical offset (log10 b) for each trial shift.
     min_overlap, step : float
         Decades.
+    flat_width : float
+        Half-width (decades) of the range of shifts over which the cost may stay within four times its
+        least value (plus 1e-6) before the shift counts as not determined (flat curves).
 
     Returns
     -------
     PairShift
         ``shift`` (decades), ``offset`` (log10 b of b relative to a; 0 without ``vertical``),
         ``overlap`` (decades), ``misfit`` (rms distance of the curves there, decades) and ``at_edge``
-        (the best shift is the smallest overlap allowed: the data want less overlap than that, so the
-        shift is not determined by the overlap).
+        (the shift is not determined by the overlap: the best shift is the smallest overlap allowed,
+        i.e. the data want less overlap than that, or the cost is flat over more than 2 flat_width).
 
     References
     ----------
@@ -176,7 +179,13 @@ def pair_shift(xa, ya, xb, yb, vertical=False, min_overlap=0.5, step=0.02):
             d = float(res.x)
     cost, off, overlap = _pair_cost(xa, ya, xb, yb, d, vertical)
     at_edge = trials.size > 2 and (k == 0 or k == trials.size - 1)
-    return PairShift(d, off, overlap, float(np.sqrt(cost)), bool(at_edge))
+    # flat curves: the cost stays within a few times its least value (plus 0.001 decade squared) over a
+    # wide range of shifts, so the overlap does not fix the shift
+    level = 4.0 * costs[k] + 1e-6
+    left = np.argmax(costs[k::-1] > level) if np.any(costs[k::-1] > level) else k + 1
+    right = np.argmax(costs[k:] > level) if np.any(costs[k:] > level) else trials.size - k
+    flat = (left + right) * step > 2 * flat_width
+    return PairShift(d, off, overlap, float(np.sqrt(cost)), bool(at_edge or flat))
 
 
 def overlap_shifts(logw, l1, l2, sweep, n_T, j0, quantity="moduli", vertical=False, min_overlap=0.5):

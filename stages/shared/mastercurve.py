@@ -147,10 +147,10 @@ def _warn_overlap(spec, data, shifts, T) -> None:
     if not pairs:
         return
     listed = "; ".join(f"{T[j] - 273.15:.4g} °C on {T[k] - 273.15:.4g} °C" for j, k in pairs)
-    message = (f"the shifted {spec['shift_on']} of these neighbouring sweeps would superpose better with less than "
-               f"{spec['min_overlap']:g} decades of overlap, so their shift is held there and not determined by "
-               f"the data: {listed}. Measure closer temperatures or wider frequency ranges, or shift on another "
-               "quantity (shift_on; a flat E' on the glassy plateau does not fix a shift)")
+    message = (f"the overlap of these neighbouring sweeps does not fix their shift on {spec['shift_on']} (the best "
+               f"shift wants less than {spec['min_overlap']:g} decades of overlap, or the curves are flat there): "
+               f"{listed}. Measure closer temperatures or wider frequency ranges, or shift on another quantity "
+               "(shift_on: a flat E' on a glassy or rubbery plateau does not fix a shift; E'' or tan delta may)")
     if spec["no_overlap"] == "error":
         raise UserError(message, file=str(data.path), key="modulus.no_overlap")
     warnings.warn(f"{data.path}: {message}", UserWarning, stacklevel=3)
