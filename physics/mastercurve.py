@@ -46,6 +46,12 @@ class Shifts(NamedTuple):
         rms of log10 E' and log10 E'' of each sweep about the shifted master curve (decades).
     wlf_residual : array (n_T,)
         log10 a_j minus the fitted WLF law (decades; 0 for ``wlf`` shifts).
+    overlap, misfit : arrays (n_T,)
+        Per sweep but the reference one (NaN there): overlap in log10 omega with the neighbour it
+        was laid on (decades) and the rms distance of the two curves there (decades), at the overlap
+        shifts.
+    at_edge : bool array (n_T,)
+        The overlap shift of the sweep wanted less overlap than allowed (not determined by overlap).
     """
 
     log10_aT: np.ndarray
@@ -55,6 +61,9 @@ class Shifts(NamedTuple):
     T_ref: float
     residual: np.ndarray
     wlf_residual: np.ndarray
+    overlap: np.ndarray
+    misfit: np.ndarray
+    at_edge: np.ndarray
 
 
 def _spline_residuals(x, ys, knots_per_decade):
@@ -75,55 +84,163 @@ def _spline_residuals(x, ys, knots_per_decade):
     return np.concatenate(out)
 
 
-def pairwise_shifts(logw, logE1, logE2, sweep, n_T, vertical=False, step=0.01):
-    """log10 a_j of each sweep relative to the first (coldest) one, from overlaps of neighbours.
+#: the quantities a sweep can be shifted on, as functions of (log10 E', log10 E'')
+SHIFT_QUANTITIES = ("moduli", "storage", "loss", "tan_delta", "complex")
 
-    For each pair (j, j + 1) the shift d of sweep j + 1 along log10 omega that minimises the
-    mean squared difference of log10 E' and log10 E'' to sweep j (linear interpolation in
-    log-log) where the two overlap (at least two points), scanned in steps of ``step`` decades;
-    with ``vertical``, the best log10 b offset is removed for each trial d.
+
+def shift_quantities(l1, l2, quantity):
+    """The log10 curves (tuple of arrays) to superpose for ``quantity``: ``moduli`` (log10 E' and
+    log10 E''), ``storage`` (E'), ``loss`` (E''), ``tan_delta`` (E''/E', which needs no vertical
+    shift) or ``complex`` (|E*| = sqrt(E'^2 + E''^2)); l1, l2: log10 E', log10 E'' (Pa)."""
+    if quantity == "moduli":
+        return (l1, l2)
+    if quantity == "storage":
+        return (l1,)
+    if quantity == "loss":
+        return (l2,)
+    if quantity == "tan_delta":
+        return (l2 - l1,)
+    if quantity == "complex":
+        return (0.5 * np.log10(10.0 ** (2 * l1) + 10.0 ** (2 * l2)),)
+    raise ValueError(f"unknown shift quantity {quantity!r}; one of {SHIFT_QUANTITIES}")
+
+
+class PairShift(NamedTuple):
+    """Shift of one sweep onto its neighbour (see :func:`pair_shift`)."""
+
+    shift: float
+    offset: float
+    overlap: float
+    misfit: float
+    at_edge: bool
+
+
+def _pair_cost(xa, ya, xb, yb, d, vertical, samples=40):
+    """Mean squared vertical distance between the curves (xa, ya) and (xb + d, yb) over their overlap
+    in x (the area between them divided by the overlap's length, sampled at ``samples`` points, linear
+    interpolation in log-log), with the best common vertical offset removed if ``vertical``; and the
+    offset and the overlap (decades)."""
+    lo, hi = max(xa[0], xb[0] + d), min(xa[-1], xb[-1] + d)
+    x = np.linspace(lo, hi, samples)
+    diffs = [np.interp(x - d, xb, b) - np.interp(x, xa, a) for a, b in zip(ya, yb, strict=True)]
+    off = float(np.mean(diffs)) if vertical else 0.0
+    return float(np.mean([np.mean((r - off) ** 2) for r in diffs])), off, hi - lo
+
+
+def pair_shift(xa, ya, xb, yb, vertical=False, min_overlap=0.5, step=0.02, flat_width=0.25):
+    """The horizontal shift d (decades) that lays sweep b, at x = log10 omega + d, on its neighbour a.
+
+    d minimises the area between the two curves in log-log over their overlap divided by the
+    overlap's length (the mean squared distance; Gergesova, Zupancic, Saprunov & Emri, Rheol. Acta
+    50, 519 (2011), minimise the area between neighbouring curves), among the shifts that leave an
+    overlap of at least ``min_overlap`` decades (or the whole narrower sweep, if shorter): a scan in
+    steps of ``step`` decades, refined by a bounded scalar minimisation around the best step.
+    Requiring an overlap keeps the shift from sliding to the edge of the data where two flat or
+    noisy curves meet by chance.
 
     Parameters
     ----------
-    logw, logE1, logE2 : arrays (m,)
-        log10 omega (rad/s), log10 E', log10 E'' (Pa) of every point, sorted by sweep then frequency.
-    sweep : int array (m,)
-        Sweep index of each point (0 = coldest).
-    n_T : int
-        Number of sweeps.
+    xa, xb : arrays
+        log10 omega of the two sweeps (rad/s), increasing.
+    ya, yb : tuples of arrays
+        The log10 quantities shifted on (:func:`shift_quantities`) at xa and xb.
+    vertical : bool
+        Remove the best common vertical offset (log10 b) for each trial shift.
+    min_overlap, step : float
+        Decades.
+    flat_width : float
+        Half-width (decades) of the range of shifts over which the cost may stay within four times its
+        least value (plus 1e-6) before the shift counts as not determined (flat curves).
 
     Returns
     -------
-    (log10_a, log10_b) : arrays (n_T,)
-        Cumulative shifts relative to sweep 0 (dimensionless, log10).
+    PairShift
+        ``shift`` (decades), ``offset`` (log10 b of b relative to a; 0 without ``vertical``),
+        ``overlap`` (decades), ``misfit`` (rms distance of the curves there, decades) and ``at_edge``
+        (the shift is not determined by the overlap: the best shift is the smallest overlap allowed,
+        i.e. the data want less overlap than that, or the cost is flat over more than 2 flat_width).
 
     References
     ----------
     docs/theory.md, section "Master curves from DMA data".
     """
+    from scipy.optimize import minimize_scalar
+
+    need = min(min_overlap, xa[-1] - xa[0], xb[-1] - xb[0])
+    lo, hi = xa[0] - xb[-1] + need, xa[-1] - xb[0] - need
+    trials = np.arange(lo, hi + 0.5 * step, step) if hi > lo else np.array([0.5 * (lo + hi)])
+    costs = np.array([_pair_cost(xa, ya, xb, yb, d, vertical)[0] for d in trials])
+    k = int(np.argmin(costs))
+    d = float(trials[k])
+    if trials.size > 2:
+        res = minimize_scalar(lambda t: _pair_cost(xa, ya, xb, yb, t, vertical)[0], method="bounded",
+                              bounds=(max(lo, d - step), min(hi, d + step)), options={"xatol": 1e-4})
+        if res.fun <= costs[k]:
+            d = float(res.x)
+    cost, off, overlap = _pair_cost(xa, ya, xb, yb, d, vertical)
+    at_edge = trials.size > 2 and (k == 0 or k == trials.size - 1)
+    # flat curves: the cost stays within a few times its least value (plus 0.001 decade squared) over a
+    # wide range of shifts, so the overlap does not fix the shift
+    level = 4.0 * costs[k] + 1e-6
+    left = np.argmax(costs[k::-1] > level) if np.any(costs[k::-1] > level) else k + 1
+    right = np.argmax(costs[k:] > level) if np.any(costs[k:] > level) else trials.size - k
+    flat = (left + right) * step > 2 * flat_width
+    return PairShift(d, off, overlap, float(np.sqrt(cost)), bool(at_edge or flat))
+
+
+def overlap_shifts(logw, l1, l2, sweep, n_T, j0, quantity="moduli", vertical=False, min_overlap=0.5):
+    """log10 a_j, log10 b_j of every sweep from the overlap of neighbours, chained from the sweep j0
+    (the one at or nearest T_ref, a = b = 1) outwards: each warmer sweep is laid on its colder
+    neighbour, each colder sweep on its warmer one (:func:`pair_shift`), and the shifts add up.
+
+    Parameters
+    ----------
+    logw, l1, l2 : arrays (m,)
+        log10 omega (rad/s), log10 E', log10 E'' (Pa), sorted by sweep then frequency.
+    sweep : int array (m,)
+        Sweep index of each point (0 = coldest).
+    n_T, j0 : int
+        Number of sweeps; the reference sweep.
+    quantity : str
+        What is superposed (:data:`SHIFT_QUANTITIES`); with ``tan_delta`` the vertical shifts are
+        still taken from E' and E'' at the chosen horizontal shift.
+    vertical : bool
+        Also fit log10 b per pair (relative to the neighbour).
+    min_overlap : float
+        Least overlap of neighbours allowed (decades).
+
+    Returns
+    -------
+    (log10_a, log10_b, overlap, misfit, at_edge) : arrays (n_T,)
+        Shifts (log10, about sweep j0) and, for each sweep but j0, the overlap with the neighbour it
+        was laid on (decades), the rms distance there (decades) and whether the overlap is the least
+        allowed; NaN / False for j0.
+
+    References
+    ----------
+    docs/theory.md, section "Master curves from DMA data"; Gergesova et al., Rheol. Acta 50, 519 (2011).
+    """
+    curves = shift_quantities(l1, l2, quantity)
     log_a, log_b = np.zeros(n_T), np.zeros(n_T)
-    for j in range(n_T - 1):
-        a, b = sweep == j, sweep == j + 1
-        xa, xb = logw[a], logw[b]
-        span = (xa.max() - xa.min()) + (xb.max() - xb.min())
-        best = (np.inf, 0.0, 0.0)
-        for d in np.arange(-span, span + step, step):
-            inside = (xb + d >= xa.min()) & (xb + d <= xa.max())
-            if inside.sum() < 2:
-                continue
-            r1 = logE1[b][inside] - np.interp(xb[inside] + d, xa, logE1[a])
-            r2 = logE2[b][inside] - np.interp(xb[inside] + d, xa, logE2[a])
-            off = 0.5 * (r1.mean() + r2.mean()) if vertical else 0.0
-            cost = np.mean((r1 - off) ** 2) + np.mean((r2 - off) ** 2)
-            if cost < best[0]:
-                best = (cost, d, off)
-        log_a[j + 1] = log_a[j] + best[1]
-        log_b[j + 1] = log_b[j] + best[2]
-    return log_a, log_b
+    overlap, misfit, edge = np.full(n_T, np.nan), np.full(n_T, np.nan), np.zeros(n_T, dtype=bool)
+    for j, ref in [(j, j - 1) for j in range(j0 + 1, n_T)] + [(j, j + 1) for j in range(j0 - 1, -1, -1)]:
+        a, b = sweep == ref, sweep == j
+        pair = pair_shift(logw[a], tuple(c[a] for c in curves), logw[b], tuple(c[b] for c in curves),
+                          vertical and quantity != "tan_delta", min_overlap)
+        off = pair.offset
+        if vertical and quantity == "tan_delta":
+            off = _pair_cost(logw[a], (l1[a], l2[a]), logw[b], (l1[b], l2[b]), pair.shift, True)[1]
+        log_a[j] = log_a[ref] + pair.shift
+        log_b[j] = log_b[ref] + off
+        overlap[j], misfit[j], edge[j] = pair.overlap, pair.misfit, pair.at_edge
+    return log_a, log_b, overlap, misfit, edge
 
 
-def fit_wlf(T, log10_aT, T_ref, anchor=None, sigma=None):
+def fit_wlf(T, log10_aT, T_ref, anchor=None, sigma=None, C2=None):
     """C1, C2 of the WLF law about T_ref fitted to measured shifts (least squares in log10 a_T).
+
+    With ``C2`` given (K), only C1 is fitted (linear least squares): the way to a law from two
+    temperatures, whose one relative shift cannot fix two constants.
 
     The shifts may be relative to the sweep ``anchor`` (then the model is W(T_j) - W(T_anchor));
     the start is the classical linearisation -(T - T_0)/log10 a = C2/C1 + (T - T_0)/C1. C2 is kept
@@ -141,6 +258,8 @@ def fit_wlf(T, log10_aT, T_ref, anchor=None, sigma=None):
         Index whose shift is the zero of ``log10_aT`` (None: the shifts are absolute, about T_ref).
     sigma : array (n,) or None
         Standard errors of the shifts (decades): weights 1/sigma (the anchor's 0 is exact).
+    C2 : float or None
+        Fixed C2 (K), or None to fit it.
 
     Returns
     -------
@@ -159,6 +278,11 @@ def fit_wlf(T, log10_aT, T_ref, anchor=None, sigma=None):
     T0 = T[anchor] if anchor is not None else T_ref
     L0 = L - (L[anchor] if anchor is not None else 0.0)
     use = np.abs(T - T0) > 1e-9
+    if C2 is not None:
+        shape = wlf_log10_shift(T, T_ref, 1.0, C2)
+        shape = shape - (wlf_log10_shift(T0, T_ref, 1.0, C2) if anchor is not None else 0.0)
+        C1 = float(np.dot(shape, L0) / np.dot(shape, shape))
+        return C1, float(C2), L0 - C1 * shape
     slope, intercept = np.polyfit(T[use] - T0, -(T[use] - T0) / np.where(L0[use] != 0, L0[use], 1e-30), 1)
     C1s, C2s = (1.0 / slope, intercept / slope) if slope > 0 and intercept > 0 else (10.0, 100.0)
     C2_start = C2s + (T_ref - T0)
@@ -184,15 +308,47 @@ def _per_sweep_rms(r, sweep, n_T):
     return np.array([np.sqrt(np.mean(r[:, sweep == j] ** 2)) for j in range(n_T)])
 
 
-def build_master_curve(T, sweep, omega, storage, loss, T_ref, method="free", vertical=False, knots_per_decade=2.0):
+def bin_sweeps(sweep, logw, values, per_decade=20.0):
+    """Means of ``values`` (each (m,), e.g. log10 E') and of log10 omega in bins of 1/``per_decade``
+    decade of each sweep: a sweep logged at many points costs the fit no more than its bins.
+
+    Parameters
+    ----------
+    sweep : int array (m,)
+        Sweep of each point (sorted by sweep, then frequency).
+    logw : array (m,)
+        log10 omega (rad/s).
+    values : tuple of arrays (m,)
+        What to average per bin (the log10 moduli).
+    per_decade : float
+        Bins per decade of frequency.
+
+    Returns
+    -------
+    (sweep, logw, values, counts)
+        The binned points (sweep, mean log10 omega, mean values) and the number of points in each bin.
+    """
+    key = np.floor(logw * per_decade).astype(np.int64)
+    ids = sweep.astype(np.int64) * (key.max() - key.min() + 2) + (key - key.min())
+    _, first, inverse, counts = np.unique(ids, return_index=True, return_inverse=True, return_counts=True)
+    mean = lambda v: np.bincount(inverse, weights=v) / counts  # noqa: E731
+    order = np.argsort(first, kind="stable")  # keep the file order: by sweep, then frequency
+    return sweep[first][order], mean(logw)[order], tuple(mean(v)[order] for v in values), counts[order]
+
+
+def build_master_curve(T, sweep, omega, storage, loss, T_ref, method="overlap", vertical=False, quantity="moduli",
+                       min_overlap=0.5, knots_per_decade=2.0, C2=None):
     """Shift multi-temperature sweeps onto one master curve at T_ref and fit the WLF law.
 
-    Least squares on log10 E' and log10 E'' of every point against one cubic B-spline in the
-    reduced frequency (``knots_per_decade`` uniform knots, refitted for each trial shift):
-    ``method = "free"``: one log10 a_j per sweep (the sweep nearest T_ref held at the WLF value),
-    started from :func:`pairwise_shifts`, then C1, C2 fitted to them (:func:`fit_wlf`);
-    ``"wlf"``: C1, C2 fitted to the data directly, started from the free fit. ``vertical`` adds
-    one log10 b_j per sweep (b = 1 at the sweep nearest T_ref).
+    ``method = "overlap"``: each sweep laid on its neighbour by the overlap of the two curves of
+    ``quantity``, chained from the sweep nearest T_ref outwards (:func:`overlap_shifts`), then C1,
+    C2 fitted to the shifts (:func:`fit_wlf`). ``"free"``: one log10 a_j per sweep by least squares
+    on log10 E' and log10 E'' of every point against one cubic B-spline in the reduced frequency
+    (``knots_per_decade`` uniform knots, refitted for each trial shift), started from the overlap
+    shifts, then C1, C2 fitted to them. ``"wlf"``: C1, C2 fitted to the data directly (the same
+    spline residual), started from the overlap shifts' law. ``vertical`` adds one log10 b_j per
+    sweep (b = 1 at the sweep nearest T_ref). ``C2`` (K) fixes C2 of the law fitted to the shifts
+    (needed with two temperatures).
 
     Parameters
     ----------
@@ -204,6 +360,10 @@ def build_master_curve(T, sweep, omega, storage, loss, T_ref, method="free", ver
         Angular frequency (rad/s), E' (Pa, > 0) and E'' (Pa, >= 0; zeros are raised to 1e-12 E').
     T_ref : float
         Reference temperature (K).
+    quantity : str
+        What the overlap shifts superpose (:data:`SHIFT_QUANTITIES`).
+    min_overlap : float
+        Least overlap of neighbouring sweeps (decades) for the overlap shifts.
 
     Returns
     -------
@@ -221,8 +381,7 @@ def build_master_curve(T, sweep, omega, storage, loss, T_ref, method="free", ver
     l2 = np.log10(np.maximum(loss, 1e-12 * storage))
     j0 = int(np.argmin(np.abs(T - T_ref)))
     others = np.arange(n_T) != j0
-    la, lb = pairwise_shifts(logw, l1, l2, sweep, n_T, vertical)
-    la, lb = la - la[j0], lb - lb[j0]
+    la, lb, overlap, misfit, edge = overlap_shifts(logw, l1, l2, sweep, n_T, j0, quantity, vertical, min_overlap)
 
     def unpack(theta, horizontal):
         a = np.zeros(n_T)
@@ -235,31 +394,32 @@ def build_master_curve(T, sweep, omega, storage, loss, T_ref, method="free", ver
     def residual(a, b):
         return _spline_residuals(logw + a[sweep], (l1 - b[sweep], l2 - b[sweep]), knots_per_decade)
 
-    free = least_squares(lambda th: residual(*unpack(th, th[:n_T - 1])),
-                         np.concatenate([la[others]] + ([lb[others]] if vertical else [])), x_scale=1.0)
-    la, lb = unpack(free.x, free.x[:n_T - 1])
-    J = free.jac[:, :n_T - 1]
-    cov = np.linalg.pinv(J.T @ J) * 2.0 * free.cost / max(J.shape[0] - free.x.size, 1)
-    sigma = np.zeros(n_T)
-    sigma[others] = np.sqrt(np.maximum(np.diag(cov), 0.0))
-    sigma[j0] = np.min(sigma[others])
-    C1, C2, wres = fit_wlf(T, la, T_ref, anchor=j0, sigma=sigma)
+    sigma = None
+    if method == "free":
+        free = least_squares(lambda th: residual(*unpack(th, th[:n_T - 1])),
+                             np.concatenate([la[others]] + ([lb[others]] if vertical else [])), x_scale=1.0)
+        la, lb = unpack(free.x, free.x[:n_T - 1])
+        J = free.jac[:, :n_T - 1]
+        cov = np.linalg.pinv(J.T @ J) * 2.0 * free.cost / max(J.shape[0] - free.x.size, 1)
+        sigma = np.zeros(n_T)
+        sigma[others] = np.sqrt(np.maximum(np.diag(cov), 0.0))
+        sigma[j0] = np.min(sigma[others])
+    C1, C2, wres = fit_wlf(T, la, T_ref, anchor=j0, sigma=sigma, C2=C2)
     log_a = la + wlf_log10_shift(T[j0], T_ref, C1, C2)
-    r = residual(log_a, lb)
     if method == "wlf":
         floor = T_ref - T.min()
 
         def law(th):
             return wlf_log10_shift(T, T_ref, th[0], floor + np.exp(th[1]))
 
-        start = np.concatenate([[C1, np.log(C2 - floor)], lb[others] if vertical else []])
+        start = np.concatenate([[C1, np.log(max(C2 - floor, 1e-3))], lb[others] if vertical else []])
         fit = least_squares(lambda th: residual(law(th), unpack(th, law(th)[others])[1]), start, x_scale="jac")
         C1, C2 = float(fit.x[0]), float(floor + np.exp(fit.x[1]))
         log_a = law(fit.x)
         lb = unpack(fit.x, log_a[others])[1]
         wres = np.zeros(n_T)
-        r = residual(log_a, lb)
-    return Shifts(log_a, lb, C1, C2, float(T_ref), _per_sweep_rms(r, sweep, n_T), wres)
+    r = residual(log_a, lb)
+    return Shifts(log_a, lb, C1, C2, float(T_ref), _per_sweep_rms(r, sweep, n_T), wres, overlap, misfit, edge)
 
 
 def relaxation_times(omega, per_decade=3, pad=1.0):

@@ -64,8 +64,8 @@ def _sweeps(T: np.ndarray, lines: np.ndarray, tolerance: float, path) -> np.ndar
         close = np.flatnonzero(np.abs(means[:j] - means[j]) <= tolerance)
         if close.size:
             raise UserError(f"a second sweep at T = {means[j]:.6g} K (the sweep from line "
-                            f"{lines[starts[close[0]]]} has {means[close[0]]:.6g} K): merge them or raise the "
-                            "temperature tolerance",
+                            f"{lines[starts[close[0]]]} has "
+                            f"{means[close[0]]:.6g} K): merge them or raise the temperature tolerance",
                             file=str(path), key=f"line {lines[starts[j]]}")
     if means.size < 2:
         raise UserError(f"only one temperature ({means[0]:.6g} K, lines {lines[0]}-{lines[-1]}): a master curve needs "
@@ -97,14 +97,15 @@ def _order(omega, bounds, lines, path, temperatures):
 def read_dma(path: Path, *, key: str = "modulus", columns=(0, 1, 2, 3), temperature_unit: str | None = None,
              frequency_unit: str | None = None, modulus_unit: str | None = None, loss_column: str = "loss_modulus",
              frequency: str = "auto", temperature_tolerance: float = 0.5,
-             loss_from_tan_delta: Callable | None = None) -> DMASweeps:
-    """Read multi-temperature frequency sweeps: a text table with columns ``columns`` = [T,
+             loss_from_tan_delta: Callable | None = None, sheet: str | None = None) -> DMASweeps:
+    """Read multi-temperature frequency sweeps: a text table or spreadsheet (``sheet``) with columns
+    ``columns`` = [T,
     frequency, E', E'' or tan delta], read and checked by :func:`roughcontact.moduli.read_moduli`
     (units, angular or cyclic frequency, ``loss_from_tan_delta``). Rows whose temperature stays
     within ``temperature_tolerance`` (K) of a sweep's first row belong to it."""
     table = read_moduli(path, key=key, columns=columns, temperature=True, temperature_unit=temperature_unit,
                         frequency_unit=frequency_unit, modulus_unit=modulus_unit, loss_column=loss_column,
-                        frequency=frequency, loss_from_tan_delta=loss_from_tan_delta)
+                        frequency=frequency, loss_from_tan_delta=loss_from_tan_delta, sheet=sheet)
     T, omega = table.temperature, table.omega
     bounds = _sweeps(T, table.lines, temperature_tolerance, table.path)
     temperatures = np.array([T[a:b].mean() for a, b in zip(bounds[:-1], bounds[1:], strict=True)])

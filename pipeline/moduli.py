@@ -25,6 +25,7 @@ from .tables import first_bad, read_table
 from .units import to_si
 
 #: the columns of a moduli table, with their scene keys of units
+_CELSIUS = {"C": "degC", "°C": "degC", "ºC": "degC", "F": "degF", "°F": "degF"}
 _UNIT_KEYS = {"T": "temperature_unit", "frequency": "frequency_unit", "E'": "modulus_unit", "E''": "modulus_unit"}
 
 
@@ -67,6 +68,8 @@ def _units(table, columns: dict, scene: dict, tan: bool, key: str) -> dict:
     or else the header (E'' falls back on E'); a UserError naming the first unknown one."""
     header = dict(zip(columns, (table.units[c] if table.units else None for c in columns.values()), strict=True))
     units = {name: scene[_UNIT_KEYS[name]] or header[name] for name in columns}
+    if units.get("T") is not None:  # instruments write C or °C for degrees Celsius (C alone is a coulomb)
+        units["T"] = _CELSIUS.get(units["T"].strip(), units["T"])
     units["E''"] = None if tan else units["E''"] or units["E'"]
     example = "# T [degC]  f [Hz]  E' [MPa]  E'' [MPa]" if "T" in columns else "# f [Hz]  E' [MPa]  E'' [MPa]"
     for name, what in (("T", "temperature column"), ("frequency", "frequency column"), ("E'", "modulus columns")):
@@ -80,23 +83,23 @@ def read_moduli(path: Path, *, key: str, columns, temperature: bool, temperature
                 frequency_unit: str | None = None, modulus_unit: str | None = None,
                 loss_column: str = "loss_modulus", frequency: str = "auto",
                 loss_from_tan_delta: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None,
-                increasing: bool = False) -> Moduli:
+                increasing: bool = False, sheet: str | None = None) -> Moduli:
     """Read a table of moduli: columns ``columns`` = [T (if ``temperature``), frequency, E', E''
-    or tan delta] (``loss_column`` says which; tan delta becomes E'' through
-    ``loss_from_tan_delta(storage, tan_delta)``, which the stage passes). Units come from the
+    or tan delta], each a 0-based index or a name of the header (``loss_column`` says which; tan
+    delta becomes E'' through ``loss_from_tan_delta(storage, tan_delta)``, which the stage passes). Units come from the
     scene (``temperature_unit``, ``frequency_unit``, ``modulus_unit``) or else the header; the
     frequency is angular or cyclic (omega = 2 pi f) as ``frequency`` says ("auto": angular if its
     unit says rad); ``increasing``: the frequency must increase strictly down the file. ``key``
-    is the scene section (errors name ``key.frequency_unit``, ...)."""
+    is the scene section (errors name ``key.frequency_unit``, ...); ``sheet``: of a spreadsheet."""
     names = (("T",) if temperature else ()) + ("frequency", "E'", "E''")
     if len(tuple(columns)) != len(names):
-        raise UserError(f"needs {('three', 'four')[temperature]} column indices [{', '.join(names)}], got "
+        raise UserError(f"needs {('three', 'four')[temperature]} columns [{', '.join(names)}], got "
                         f"{list(columns)}", key=f"{key}.columns")
     tan = loss_column == "tan_delta"
     if tan and loss_from_tan_delta is None:
         raise TypeError("loss_column 'tan_delta' needs loss_from_tan_delta(storage, tan_delta) from the stage")
-    table = read_table(path)
-    columns = dict(zip(names, columns, strict=True))
+    table = read_table(path, sheet=sheet)
+    columns = dict(zip(names, (table.index(c) for c in columns), strict=True))
     raw = {name: table.column(index) for name, index in columns.items()}
     scene = {"temperature_unit": temperature_unit, "frequency_unit": frequency_unit, "modulus_unit": modulus_unit}
     units = _units(table, columns, scene, tan, key)
@@ -125,8 +128,8 @@ def read_moduli(path: Path, *, key: str, columns, temperature: bool, temperature
                   f"{f_raw[i + 1]:g})", table.path, lambda i: where(i + 1))
     first_bad(storage <= 0, lambda i: f"storage modulus E' must be positive, got {s_raw[i]:g}", table.path, where)
     loss_name = "tan delta" if tan else "loss modulus E''"
-    first_bad(l_raw < 0 if tan else loss < 0, lambda i: f"{loss_name} must be >= 0, got {l_raw[i]:g}",
-              table.path, where)
+    first_bad(l_raw < 0 if tan else loss < 0, lambda i: f"{loss_name} must be >= 0, got {l_raw[i]:g}", table.path,
+              where)
     kind = "angular" if angular else "cyclic: omega = 2 pi f"
     attrs = {"source_file": str(path), "frequency_column": f"{units['frequency']} ({kind})"}
     if temperature:

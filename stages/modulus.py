@@ -55,6 +55,7 @@ from .shared.mastercurve import (
     DMA_COORDS,
     DMA_OUTPUTS,
     DMA_PARAMS,
+    check_dma,
     dma_options,
     dma_variables,
     master_curve,
@@ -120,72 +121,53 @@ _FILE = (
 )
 
 
-def _check_dma(values: dict, key: str) -> None:
-    """The dma source fits its own temperature shifts: none may be given."""
-    if values["shift"] != "none" or values["vertical_shift"] != "none":
-        which = "shift" if values["shift"] != "none" else "vertical_shift"
-        raise UserError("the dma source fits its own temperature shifts: remove shift / vertical_shift "
-                        "(see fit and vertical_fit)", key=f"{key}.{which}")
-
-
-def _check_box(values: dict, key: str) -> None:
-    """The box spectrum: a box of positive width, the glassy modulus above the rubbery one."""
-    if not values["tau1"] < values["tau2"]:
-        raise UserError(f"needs tau1 < tau2, got {values['tau1']:g} s and {values['tau2']:g} s", key=f"{key}.tau2")
-    if not values["E_inf"] > values["E0"]:
-        raise UserError(f"needs E_inf > E0, got {values['E_inf']:g} Pa and {values['E0']:g} Pa", key=f"{key}.E_inf")
-
-
-def _check_prony(values: dict, key: str) -> None:
-    """The Prony series: one relaxation time per modulus."""
-    Ek, tk = np.atleast_1d(values["prony_E"]), np.atleast_1d(values["prony_tau"])
-    if Ek.size != tk.size:
-        raise UserError(f"prony_E has {Ek.size} value(s) but prony_tau has {tk.size}", key=f"{key}.prony_tau")
-
-
-def _check_shift_table(values: dict, T: np.ndarray, key: str) -> None:
-    """The shift table: given, its columns as long as shift_T, at least two increasing
-    temperatures that bracket every T."""
-    name = "shift_log10_aT" if values["shift"] == "table" else "shift_log10_bT"
-    if values["shift_T"] is None or values[name] is None:
-        raise UserError(f"a shift table needs shift_T and {name}", key=f"{key}.shift_T")
-    Ts = np.atleast_1d(values["shift_T"])
-    for col in ("shift_log10_aT", "shift_log10_bT"):
-        if values[col] is not None and np.atleast_1d(values[col]).size != Ts.size:
-            raise UserError(f"{col} must have as many values as shift_T ({Ts.size})", key=f"{key}.{col}")
-    if Ts.size < 2 or np.any(np.diff(Ts) <= 0):
-        raise UserError("shift_T must list at least two increasing temperatures", key=f"{key}.shift_T")
-    if np.any(T < Ts[0]) or np.any(T > Ts[-1]):
-        raise UserError(f"temperature outside the shift table [{Ts[0]:g}, {Ts[-1]:g}] K", key=f"{key}.T")
-
-
-def _check_shift(values: dict, T: np.ndarray, key: str) -> None:
-    """The temperature shift at the temperatures T: WLF not singular there, a shift table usable."""
-    if values["shift"] == "wlf" and np.any(values["C2"] + T - values["T_ref"] <= 0):
-        raise UserError(f"WLF is singular at T <= T_ref - C2 = {values['T_ref'] - values['C2']:g} K",
-                        key=f"{key}.T")
-    if values["shift"] == "table" or values["vertical_shift"] == "table":
-        _check_shift_table(values, T, key)
+def _check_shift_table(values: dict, key: str, T: np.ndarray) -> None:
+    """A shift table: both columns, as many values as temperatures, increasing, covering T."""
+    shift = values["shift"]
+    table_needed = shift == "table" or values["vertical_shift"] == "table"
+    if table_needed:
+        name = "shift_log10_aT" if shift == "table" else "shift_log10_bT"
+        if values["shift_T"] is None or values[name] is None:
+            raise UserError(f"a shift table needs shift_T and {name}", key=f"{key}.shift_T")
+        Ts = np.atleast_1d(values["shift_T"])
+        for col in ("shift_log10_aT", "shift_log10_bT"):
+            if values[col] is not None and np.atleast_1d(values[col]).size != Ts.size:
+                raise UserError(f"{col} must have as many values as shift_T ({Ts.size})", key=f"{key}.{col}")
+        if Ts.size < 2 or np.any(np.diff(Ts) <= 0):
+            raise UserError("shift_T must list at least two increasing temperatures", key=f"{key}.shift_T")
+        if np.any(T < Ts[0]) or np.any(T > Ts[-1]):
+            raise UserError(f"temperature outside the shift table [{Ts[0]:g}, {Ts[-1]:g}] K", key=f"{key}.T")
 
 
 def _check_modulus(values: dict, key: str) -> None:
-    """The [modulus] section: the model of its kind, then T_ref and T (T defaults to T_ref, else
-    20 degC), the temperature shift, and the frequency range."""
     kind = values["kind"]
-    if kind == "dma":
-        _check_dma(values, key)
-    elif kind == "box":
-        _check_box(values, key)
-    elif kind == "prony":
-        _check_prony(values, key)
-    needs_ref = values["shift"] != "none" or values["vertical_shift"] != "none" or kind == "file"
+    if kind == "dma" and (values["shift"] != "none" or values["vertical_shift"] != "none"):
+        which = "shift" if values["shift"] != "none" else "vertical_shift"
+        raise UserError("the dma source fits its own temperature shifts: remove shift / vertical_shift "
+                        "(see fit and vertical_fit)", key=f"{key}.{which}")
+    if kind == "box":
+        if not values["tau1"] < values["tau2"]:
+            raise UserError(f"needs tau1 < tau2, got {values['tau1']:g} s and {values['tau2']:g} s", key=f"{key}.tau2")
+        if not values["E_inf"] > values["E0"]:
+            raise UserError(f"needs E_inf > E0, got {values['E_inf']:g} Pa and {values['E0']:g} Pa", key=f"{key}.E_inf")
+    if kind == "prony":
+        Ek, tk = np.atleast_1d(values["prony_E"]), np.atleast_1d(values["prony_tau"])
+        if Ek.size != tk.size:
+            raise UserError(f"prony_E has {Ek.size} value(s) but prony_tau has {tk.size}", key=f"{key}.prony_tau")
+    shift = values["shift"]
+    needs_ref = shift != "none" or values["vertical_shift"] != "none" or kind == "file"
     if needs_ref and values["T_ref"] is None:
         raise UserError("give T_ref (the temperature of the model parameters or of the master curve)",
                         key=f"{key}.T_ref")
     if values["T"] is None:
         # no temperature dependence without a shift: T only labels the result
         values["T"] = values["T_ref"] if values["T_ref"] is not None else 293.15
-    _check_shift(values, np.atleast_1d(values["T"]), key)
+    T = np.atleast_1d(values["T"])
+    if shift == "wlf":
+        if np.any(values["C2"] + T - values["T_ref"] <= 0):
+            raise UserError(f"WLF is singular at T <= T_ref - C2 = {values['T_ref'] - values['C2']:g} K",
+                            key=f"{key}.T")
+    _check_shift_table(values, key, T)
     lo, hi = values["omega_min"], values["omega_max"]
     if lo is not None and hi is not None and not hi > 10.0 * lo:
         raise UserError("needs omega_max > 10 omega_min", key=f"{key}.omega_max")
@@ -235,7 +217,8 @@ def _shift_factors(spec, T: np.ndarray) -> tuple[np.ndarray, np.ndarray, str]:
     if worst is not None:
         raise UserError(
             f"the temperature shift at T = {np.atleast_1d(T)[worst]:.6g} K is a_T = 10^{log_aT.flat[worst]:.4g}, "
-            f"beyond 10^+-{MAX_LOG10_SHIFT}: relaxation times that large or small are outside the shift law's validity "
+            "beyond "
+            f"10^+-{MAX_LOG10_SHIFT}: relaxation times that large or small are outside the shift law's validity "
             f"(for WLF, T is too close to T_ref - C2 = {T_ref - spec['C2']:.6g} K); use temperatures nearer T_ref",
             key="modulus.T")
     return 10.0 ** log_aT, b_T, how
@@ -255,8 +238,8 @@ def _model(spec, curve):
                  "model_parameters": json.dumps({"E0": spec["E0"], "prony_E": Ek.tolist(), "prony_tau": tk.tolist()})}
         return lambda w: prony_modulus(w, spec["E0"], Ek, tk), attrs
     if kind == "elastic":
-        attrs = {"model_formula": "elastic: E = E (real, frequency independent)"}
-        return lambda w: elastic_modulus(w, spec["E"]), attrs
+        formula = {"model_formula": "elastic: E = E (real, frequency independent)"}
+        return lambda w: elastic_modulus(w, spec["E"]), formula
     omega = curve.omega
     attrs = dict(
         curve.attrs,
@@ -287,6 +270,8 @@ def check_modulus(inp: StageInput) -> None:
         raise UserError(_NO_SECTION, key="modulus")
     if spec["kind"] != "dma":  # the dma source's shifts are fitted in compute
         _shift_factors(spec, np.atleast_1d(np.asarray(spec["T"], dtype=float)))
+    else:
+        check_dma(spec, inp.files.get("modulus.sweeps"))
 
 
 def compute_modulus(inp: StageInput) -> xr.Dataset:
@@ -315,8 +300,9 @@ def compute_modulus(inp: StageInput) -> xr.Dataset:
         bT = xr.DataArray(bT_values, dims=("T",), coords={"T": T["T"]})
     else:
         aT, bT = xr.DataArray(aT_values[0]), xr.DataArray(bT_values[0])
-    if curve is not None and (grid[0] * aT_values.min() < curve.omega[0]
-                              or grid[-1] * aT_values.max() > curve.omega[-1]):
+    outside = curve is not None and (grid[0] * aT_values.min() < curve.omega[0]
+                                     or grid[-1] * aT_values.max() > curve.omega[-1])
+    if outside:
         warnings.warn(
             f"{spec['path']}: the master curve covers omega = {curve.omega[0]:.3g}..{curve.omega[-1]:.3g} rad/s at "
             f"T_ref; E(omega, T) is extrapolated outside it (E' constant, E'' ~ omega below and ~ 1/omega above; "
@@ -383,7 +369,7 @@ def _master_curve_options(params) -> dict:
 register(
     Stage(
         name="modulus",
-        version="2",
+        version="3",
         compute=compute_modulus,
         check=check_modulus,
         reads=("modulus", "numerics.modulus_points_per_decade"),

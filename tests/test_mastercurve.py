@@ -9,6 +9,8 @@ and the line.
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -26,7 +28,7 @@ E_RELAXED = 5e6
 C1, C2, T_REF = 10.0, 60.0, 273.15
 
 
-FREQS = np.logspace(-1, 2, 13)  # Hz, the frequencies of each synthetic sweep
+FREQS = np.logspace(-1, 2, 13)
 
 
 def sweeps(temps_C, noise=0.01, seed=1, vertical=False, freqs=FREQS):
@@ -235,3 +237,165 @@ def test_dma_and_master_curve_tables_read_tan_delta_through_the_stages_kernel(tm
     np.testing.assert_array_equal(master.loss, sweeps.loss[:3])
     with pytest.raises(TypeError, match="loss_from_tan_delta"):
         READERS["dma"](dma, loss_column="tan_delta")
+
+
+# ----------------------------------------------------------------------------------------
+# Overlap shifts on a glassy plateau; instrument files; two temperatures; long sweeps
+# ----------------------------------------------------------------------------------------
+
+#: a spectrum of long times only: the cold sweeps sit on the glassy plateau (E' flat within 5 %)
+GLASSY_TAU = np.logspace(0, 7, 29)
+GLASSY_STRENGTH = 2e9 / 29 * 2.5 * np.exp(-0.5 * ((np.log10(GLASSY_TAU) - 3.5) / 1.5) ** 2)
+GLASSY_T = np.array([-18.0, -12, -6, 0, 10, 20, 30, 40, 50, 60])
+
+
+def glassy_sweeps(seed, freqs=FREQS):
+    rng = np.random.default_rng(seed)
+    T = np.repeat(273.15 + GLASSY_T, freqs.size)
+    sweep = np.repeat(np.arange(GLASSY_T.size), freqs.size)
+    omega = np.tile(2 * np.pi * freqs, GLASSY_T.size)
+    Ep, Epp = ve.prony_modulus(omega * 10.0 ** ve.wlf_log10_shift(T, T_REF, C1, C2), 5e6, GLASSY_STRENGTH, GLASSY_TAU)
+    noisy = lambda E: E * (1 + 0.01 * rng.standard_normal(E.size))  # noqa: E731
+    return np.unique(T), sweep, omega, noisy(Ep), noisy(Epp)
+
+
+@pytest.mark.parametrize("quantity", ["moduli", "loss", "tan_delta"])
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_overlap_shifts_hold_on_a_glassy_plateau_with_noise(quantity, seed):
+    """E' flat within 5 % over the four coldest sweeps, 1 % noise: shifting on what has structure
+    there (E'', tan delta, or E' and E'' together) gives the shifts back within 0.2 decades and leaves
+    every pair overlapping."""
+    T, sweep, w, Ep, Epp = glassy_sweeps(seed)
+    cold = sweep < 4
+    flat = ve.prony_modulus(w[cold] * 10.0 ** ve.wlf_log10_shift(T[sweep[cold]], T_REF, C1, C2), 5e6,
+                            GLASSY_STRENGTH, GLASSY_TAU)[0]
+    assert max(np.ptp(np.log10(flat[sweep[cold] == j])) for j in range(4)) < np.log10(1.05)
+    fit = mc.build_master_curve(T, sweep, w, Ep, Epp, T_REF, quantity=quantity)
+    np.testing.assert_allclose(fit.log10_aT, ve.wlf_log10_shift(T, T_REF, C1, C2), atol=0.2)
+    assert not fit.at_edge.any() and np.nanmin(fit.overlap) > 0.5
+    assert np.nanmax(fit.misfit) < 0.02  # decades: the noise of two curves
+
+
+def test_a_flat_storage_modulus_does_not_fix_a_shift_and_says_so():
+    """Shifting on E' alone where E' is flat: the pairs concerned are flagged, not silently placed."""
+    T, sweep, w, Ep, Epp = glassy_sweeps(2)
+    fit = mc.build_master_curve(T, sweep, w, Ep, Epp, T_REF, quantity="storage")
+    assert fit.at_edge[:3].any()
+
+
+def test_binned_long_sweeps_give_the_shifts_of_the_short_ones():
+    """A sweep logged at 2000 points is averaged in bins (20 per decade): the fit sees ~60 points a
+    sweep and gives the shifts of the 13-point sweeps."""
+    T, sweep, w, Ep, Epp = glassy_sweeps(1, freqs=np.logspace(-1, 2, 2000))
+    s, lw, (l1, l2), counts = mc.bin_sweeps(sweep, np.log10(w), (np.log10(Ep), np.log10(Epp)), 20.0)
+    assert s.size <= 61 * T.size and counts.sum() == sweep.size
+    fit = mc.build_master_curve(T, s, 10.0 ** lw, 10.0 ** l1, 10.0 ** l2, T_REF, quantity="moduli")
+    np.testing.assert_allclose(fit.log10_aT, ve.wlf_log10_shift(T, T_REF, C1, C2), atol=0.05)
+
+
+def test_two_temperatures_refuse_a_wlf_fit_and_hold_C2_with_overlap_shifts(tmp_path):
+    T, sweep, w, Ep, Epp = sweeps(np.array([0.0, 10.0]))
+    path = write_dma(tmp_path / "two.txt", T, w, Ep, Epp)
+    with pytest.raises(UserError, match="two temperatures .* set fit = \"overlap\"") as err:
+        _run(_scene(path, fit="wlf"), tmp_path)
+    assert err.value.key == "modulus.fit"
+    with pytest.warns(UserWarning, match="C2 held at modulus.C2 = 60 K"):
+        mod = _run(_scene(path, C2="60 K"), tmp_path)
+    assert float(mod["wlf_C2"]) == pytest.approx(60.0)
+    assert float(mod["wlf_C1"]) == pytest.approx(C1, rel=0.05)
+
+
+def test_stage_reports_overlap_and_misfit_per_sweep_and_can_refuse_a_gap(tmp_path):
+    T, sweep, w, Ep, Epp = sweeps(TEN)
+    path = write_dma(tmp_path / "dma.txt", T, w, Ep, Epp)
+    mod = _run(_scene(path, shift_on="moduli"), tmp_path)
+    overlap = mod["sweep_overlap"].values
+    assert np.isnan(overlap[1]) and np.nanmin(overlap) > 0.5 and mod["sweep_overlap"].attrs["units"] == "1"
+    assert np.nanmax(mod["sweep_pair_misfit"].values) < 0.02
+    # 40 K apart, 3-decade sweeps: the true shift leaves no overlap; refused naming both temperatures
+    T, sweep, w, Ep, Epp = sweeps(np.array([-20.0, 20.0, 60.0]))
+    path = write_dma(tmp_path / "gap.txt", T, w, Ep, Epp)
+    with pytest.raises(UserError, match=r"20 °C on -20 °C"):
+        _run(_scene(path, no_overlap="error", shift_on="moduli"), tmp_path / "b")
+
+
+# the same 6 points in every form an instrument writes
+FORMS = {
+    "comment_header.txt": "\n".join(GOOD) + "\n",
+    "names_units.csv": "T,f,E',E''\nC,Hz,MPa,MPa\n" + "\n".join(",".join(r.split()) for r in GOOD[1:]) + "\n",
+    "semicolon_comma.csv": "T;f;E';E''\n°C;Hz;MPa;MPa\n" + "\n".join(";".join(c.replace(".", ",") for c in r.split())
+                                                                   for r in GOOD[1:]) + "\n",
+    "tab_comma.txt": "T\tf\tE'\tE''\ndegC\tHz\tMPa\tMPa\n" + "\n".join("\t".join(c.replace(".", ",") for c in r.split())
+                                                                        for r in GOOD[1:]) + "\n",
+}
+
+
+@pytest.mark.parametrize("name", list(FORMS) + ["sheet.xlsx"])
+def test_every_file_form_reads_the_same_numbers(tmp_path, name):
+    from roughcontact.readers import READERS
+
+    path = tmp_path / name
+    if name.endswith(".xlsx"):
+        pd = pytest.importorskip("pandas")
+        pytest.importorskip("openpyxl")
+        rows = [r.split() for r in GOOD[1:]]
+        frame = pd.DataFrame([["degC", "Hz", "MPa", "MPa"]] + [[float(c) for c in r] for r in rows],
+                             columns=["T", "f", "E'", "E''"])
+        frame.to_excel(path, index=False)
+    else:
+        path.write_text(FORMS[name], encoding="utf-8")
+    base = tmp_path / "base.txt"
+    base.write_text(FORMS["comment_header.txt"])
+    want = READERS["dma"](base)
+    for columns in ((0, 1, 2, 3), ("T", "f", "E'", "E''")):
+        got = READERS["dma"](path, columns=columns)
+        for field in ("temperatures", "omega", "storage", "loss"):
+            np.testing.assert_allclose(getattr(got, field), getattr(want, field), rtol=1e-12)
+
+
+@pytest.mark.parametrize("name, text, line, message", [
+    ("bad.csv", "T;f;E';E''\nC;Hz;MPa;MPa\n0;0,1;10;1\n0;1;1x2;1,5\n", "line 4", "not a number"),
+    ("bad.txt", "T\tf\tE'\tE''\nC\tHz\tMPa\tMPa\n0\t0,1\t10\t1\n0\t1\t12\n", "line 4", "3 column(s)"),
+    ("bad_name.csv", "T,f,E',E''\nC,Hz,MPa,MPa\n0,0.1,10,1\n", "line 2", "no column named 'E_stor'"),
+])
+def test_bad_instrument_files_give_one_line_naming_file_and_line(tmp_path, name, text, line, message):
+    from roughcontact.readers import READERS
+
+    path = tmp_path / name
+    path.write_text(text)
+    columns = ("T", "f", "E_stor", "E''") if "name" in name else (0, 1, 2, 3)
+    with pytest.raises(UserError) as err:
+        READERS["dma"](path, columns=columns)
+    assert err.value.file == str(path) and err.value.key == line and message in err.value.message
+    assert "\n" not in str(err.value)
+
+
+def test_a_bad_cell_in_a_spreadsheet_names_its_row(tmp_path):
+    pd = pytest.importorskip("pandas")
+    pytest.importorskip("openpyxl")
+    from roughcontact.readers import READERS
+
+    frame = pd.DataFrame([["degC", "Hz", "MPa", "MPa"], [0, 0.1, 10, 1], [0, 1, "12 MPa", 1.5]],
+                         columns=["T", "f", "E'", "E''"])
+    frame.to_excel(tmp_path / "bad.xlsx", index=False)
+    with pytest.raises(UserError) as err:
+        READERS["dma"](tmp_path / "bad.xlsx")
+    assert err.value.key == "line 4" and "not a number" in err.value.message
+
+
+REAL = Path(__file__).parent / "data" / "pyvisco"
+
+
+def test_a_real_instrument_export_reads_the_same_as_csv_and_as_excel():
+    """pyvisco's example measurement (BSD-3, tests/data/pyvisco/README.md): the Eplexor's Excel
+    export (names row, units row with °C) and the CSV of it (units row with C) give the same 21 sweeps."""
+    pytest.importorskip("pandas")
+    pytest.importorskip("xlrd")
+    from roughcontact.readers import READERS
+
+    csv = READERS["dma"](REAL / "freq_user_raw.csv", columns=("T", "f", "E_stor", "E_loss"))
+    xls = READERS["dma"](REAL / "freq_Eplexor_raw.xls", columns=("T", "f", "E'", "E''"))
+    assert csv.temperatures.size == 21 and csv.temperatures[0] == pytest.approx(273.15 - 49.9, abs=0.1)
+    for field in ("temperatures", "omega", "storage", "loss"):
+        np.testing.assert_allclose(getattr(xls, field), getattr(csv, field), rtol=1e-8)
+    assert csv.omega.min() == pytest.approx(2 * np.pi * 0.1) and csv.storage.max() > 8e9

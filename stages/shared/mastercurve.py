@@ -15,15 +15,25 @@ from typing import NamedTuple
 import numpy as np
 import xarray as xr
 
-from roughcontact.physics.mastercurve import build_master_curve, fit_prony, kramers_kronig_deviation, relaxation_times
+from roughcontact.physics.mastercurve import (
+    SHIFT_QUANTITIES,
+    bin_sweeps,
+    build_master_curve,
+    fit_prony,
+    kramers_kronig_deviation,
+    relaxation_times,
+)
 from roughcontact.physics.viscoelastic import loss_modulus_from_tan_delta, prony_modulus
-from roughcontact.stage import Param, Var
+from roughcontact.stage import Param, UserError, Var
 
 #: keys of ``[modulus] kind = "dma"``
 DMA_PARAMS = (
     Param("sweeps", "path",
-          doc="text/CSV file of DMA frequency sweeps: temperature, frequency, E', E'' (or tan delta)"),
+          doc="text/CSV/Excel file of DMA frequency sweeps: temperature, frequency, E', E'' (or tan delta)"),
     Param("columns", "intlist", default=(0, 1, 2, 3), lo=0, doc="0-based columns of T, frequency, E', E''/tan delta"),
+    Param("column_names", "list", default=None,
+          doc="the columns T, frequency, E', E''/tan delta by their names in the header (instead of columns)"),
+    Param("sheet", "str", default=None, doc="Excel files: the sheet to read (default the first)"),
     Param("loss_column", "choice", default="loss_modulus", choices=("loss_modulus", "tan_delta"),
           doc="what the fourth column holds"),
     Param("temperature_unit", "str", default=None, doc="unit of the temperature column (else from the header)"),
@@ -33,8 +43,17 @@ DMA_PARAMS = (
           doc="cyclic f (omega = 2 pi f) or angular omega; auto: angular if the unit says rad, else cyclic"),
     Param("temperature_tolerance", "quantity", "K", default=0.5, lo=0.0, lo_open=True,
           doc="rows within this of a sweep's first temperature belong to the sweep"),
-    Param("fit", "choice", default="wlf", choices=("wlf", "free"),
-          doc="horizontal shifts: WLF fitted to the data (wlf) or one shift per sweep, then WLF fitted to them (free)"),
+    Param("fit", "choice", default="overlap", choices=("overlap", "wlf", "free"),
+          doc="horizontal shifts: each sweep laid on its neighbour by their overlap, chained from T_ref, then WLF "
+              "fitted to them (overlap); WLF fitted to all data (wlf); one shift per sweep by a global fit (free)"),
+    Param("shift_on", "choice", default="storage", choices=SHIFT_QUANTITIES,
+          doc="what the overlap shifts superpose: storage (E'), loss (E''), moduli (both), tan_delta, complex (|E*|)"),
+    Param("min_overlap", "quantity", "", default=0.5, lo=0.0, lo_open=True,
+          doc="least overlap of neighbouring sweeps in log10 frequency (decades) for the overlap shifts"),
+    Param("no_overlap", "choice", default="warn", choices=("warn", "error"),
+          doc="when a sweep's best shift leaves less than min_overlap with its neighbour: warn or refuse"),
+    Param("bins_per_decade", "int", default=20, lo=2,
+          doc="sweeps logged at more points are averaged in bins of this many per decade of frequency before the fit"),
     Param("vertical_fit", "choice", default="none", choices=("none", "free"),
           doc="vertical shifts b_T: none or one per sweep"),
     Param("kk_tolerance", "quantity", "", default=0.05, lo=0.0, lo_open=True,
@@ -49,12 +68,20 @@ DMA_OUTPUTS = {
     "sweep_shift_residual": Var("1", "rms of log10 E' and log10 E'' of each sweep about the shifted master curve "
                                      "(decades)", optional=True),
     "sweep_wlf_residual": Var("1", "log10 a_T of each sweep minus the fitted WLF law (decades)", optional=True),
+    "sweep_overlap": Var("1", "overlap with the neighbour it was shifted onto (decades)", optional=True,
+                         attrs={"comment": "log10 frequency range both sweeps cover after the overlap shift; each "
+                                           "sweep is laid on its neighbour nearer T_ref (NaN for the reference)"}),
+    "sweep_pair_misfit": Var("1", "rms distance to that neighbour in the overlap (decades)", optional=True,
+                             attrs={"comment": "rms of the log10 distance between the two curves of the shifted "
+                                               "quantity (shift_on) over their overlap, at the overlap shift"}),
     "sweep_kk_deviation": Var("1", "rms relative deviation of E' from its Kramers-Kronig reconstruction from E''",
                               optional=True),
     "relaxation_strength": Var("Pa", "moduli E_k of the fitted generalized Maxwell spectrum at T_ref", optional=True),
     "relaxed_modulus": Var("Pa", "relaxed modulus E0 of the fitted spectrum", optional=True),
     "spectrum_fit_residual": Var("1", "rms relative residual of E' and E'' about the fitted spectrum", optional=True),
-    "dma_temperature": Var("K", "temperature of each DMA point", optional=True),
+    "dma_temperature": Var("K", "temperature of each DMA point", optional=True,
+                           attrs={"comment": "points of a sweep logged at more than bins_per_decade per decade are "
+                                             "bin means (log10 E', log10 E'', log10 omega)"}),
     "dma_reduced_omega": Var("rad/s", "reduced angular frequency omega a_T of each DMA point", optional=True),
     "dma_storage_modulus": Var("Pa", "E' of each DMA point divided by b_T", optional=True),
     "dma_loss_modulus": Var("Pa", "E'' of each DMA point divided by b_T", optional=True),
@@ -83,6 +110,50 @@ class MasterCurve(NamedTuple):
     storage: np.ndarray
     loss: np.ndarray
     point_T: np.ndarray
+    overlap: np.ndarray
+    misfit: np.ndarray
+
+
+def check_dma(spec, data) -> None:
+    """Rules between the [modulus] keys and the DMA file: two temperatures give one relative shift,
+    which cannot fix both WLF constants."""
+    if data is None or data.temperatures.size > 2:
+        return
+    listed = " and ".join(f"{T - 273.15:.4g} °C" for T in data.temperatures)
+    if spec["fit"] != "overlap":
+        raise UserError(f"two temperatures ({listed}) give one relative shift, which cannot fix the two WLF constants "
+                        f"C1 and C2: measure a third temperature, or set fit = \"overlap\" (C2 is then held at "
+                        f"modulus.C2, {spec['C2']:g} K unless you set it, and only C1 is fitted)", key="modulus.fit")
+
+
+def _binned(data, per_decade):
+    """The sweeps averaged in bins of 1/per_decade decade (log10 moduli averaged), where a sweep has
+    more points than bins: the fit's cost then does not grow with the file's rows."""
+    logw = np.log10(data.omega)
+    counts = np.bincount(data.sweep)
+    spans = np.array([np.ptp(logw[data.sweep == j]) for j in range(counts.size)])
+    if np.all(counts <= 1.5 * per_decade * spans + 2):
+        return data.sweep, data.omega, data.storage, data.loss
+    l2 = np.log10(np.maximum(data.loss, 1e-12 * data.storage))
+    sweep, lw, (l1, l2), _ = bin_sweeps(data.sweep, logw, (np.log10(data.storage), l2), per_decade)
+    return sweep, 10.0 ** lw, 10.0 ** l1, 10.0 ** l2
+
+
+def _warn_overlap(spec, data, shifts, T) -> None:
+    """Warn (or refuse, with no_overlap = "error") naming both temperatures of each pair whose best
+    shift leaves less overlap than min_overlap."""
+    j0 = int(np.nanargmin(np.where(np.isnan(shifts.overlap), 0.0, np.inf)))
+    pairs = [(j, j - 1 if j > j0 else j + 1) for j in np.flatnonzero(shifts.at_edge)]
+    if not pairs:
+        return
+    listed = "; ".join(f"{T[j] - 273.15:.4g} °C on {T[k] - 273.15:.4g} °C" for j, k in pairs)
+    message = (f"the overlap of these neighbouring sweeps does not fix their shift on {spec['shift_on']} (the best "
+               f"shift wants less than {spec['min_overlap']:g} decades of overlap, or the curves are flat there): "
+               f"{listed}. Measure closer temperatures or wider frequency ranges, or shift on another quantity "
+               "(shift_on: a flat E' on a glassy or rubbery plateau does not fix a shift; E'' or tan delta may)")
+    if spec["no_overlap"] == "error":
+        raise UserError(message, file=str(data.path), key="modulus.no_overlap")
+    warnings.warn(f"{data.path}: {message}", UserWarning, stacklevel=3)
 
 
 def master_curve(spec, data) -> MasterCurve:
@@ -90,15 +161,23 @@ def master_curve(spec, data) -> MasterCurve:
     and the spectrum, run the Kramers-Kronig check and warn (naming the temperatures) where it fails."""
     T = data.temperatures
     T_ref = spec["T_ref"] if spec["T_ref"] is not None else float(T[np.argmin(np.abs(T - np.median(T)))])
-    shifts = build_master_curve(T, data.sweep, data.omega, data.storage, data.loss, T_ref, spec["fit"],
-                                spec["vertical_fit"] == "free")
-    reduced = data.omega * 10.0 ** shifts.log10_aT[data.sweep]
-    b = 10.0 ** shifts.log10_bT[data.sweep]
-    storage, loss = data.storage / b, np.maximum(data.loss / b, 1e-12 * data.storage / b)
+    sweep, omega, storage_raw, loss_raw = _binned(data, spec["bins_per_decade"])
+    two = T.size == 2
+    if two:
+        warnings.warn(f"{data.path}: two temperatures give one relative shift: WLF C2 held at modulus.C2 = "
+                      f"{spec['C2']:g} K and only C1 fitted; set modulus.C2 to your material's value, or measure a "
+                      "third temperature", UserWarning, stacklevel=2)
+    shifts = build_master_curve(T, sweep, omega, storage_raw, loss_raw, T_ref, spec["fit"],
+                                spec["vertical_fit"] == "free", spec["shift_on"], spec["min_overlap"],
+                                C2=spec["C2"] if two else None)
+    _warn_overlap(spec, data, shifts, T)
+    reduced = omega * 10.0 ** shifts.log10_aT[sweep]
+    b = 10.0 ** shifts.log10_bT[sweep]
+    storage, loss = storage_raw / b, np.maximum(loss_raw / b, 1e-12 * storage_raw / b)
     times = relaxation_times(reduced, int(spec["spectrum_per_decade"]))
     E0, moduli, fit_residual = fit_prony(reduced, storage, loss, times)
-    _, deviation = kramers_kronig_deviation(reduced, storage, loss, times, data.sweep)
-    kk = np.array([np.sqrt(np.mean(deviation[data.sweep == j] ** 2)) for j in range(T.size)])
+    _, deviation = kramers_kronig_deviation(reduced, storage, loss, times, sweep)
+    kk = np.array([np.sqrt(np.mean(deviation[sweep == j] ** 2)) for j in range(T.size)])
     bad = np.flatnonzero(kk > spec["kk_tolerance"])
     if bad.size:
         listed = ", ".join(f"{T[j] - 273.15:.4g} °C ({100 * kk[j]:.3g} %)" for j in bad)
@@ -107,7 +186,7 @@ def master_curve(spec, data) -> MasterCurve:
                       "not superpose", UserWarning, stacklevel=2)
     return MasterCurve(float(T_ref), shifts.C1, shifts.C2, T, shifts.log10_aT, shifts.log10_bT, shifts.residual,
                        shifts.wlf_residual, kk, E0, moduli, times, fit_residual, reduced, storage, loss,
-                       T[data.sweep])
+                       T[sweep], shifts.overlap, shifts.misfit)
 
 
 def model(curve: MasterCurve):
@@ -134,7 +213,8 @@ def dma_variables(curve: MasterCurve, wanted) -> dict:
         return {}
     per_sweep = {"sweep_log10_aT": curve.log10_aT, "sweep_log10_bT": curve.log10_bT,
                  "sweep_shift_residual": curve.residual, "sweep_wlf_residual": curve.wlf_residual,
-                 "sweep_kk_deviation": curve.kk_deviation}
+                 "sweep_kk_deviation": curve.kk_deviation, "sweep_overlap": curve.overlap,
+                 "sweep_pair_misfit": curve.misfit}
     out = {name: xr.DataArray(values, dims=("shift_T",), coords={"shift_T": curve.temperatures})
            for name, values in per_sweep.items()}
     out["relaxation_strength"] = xr.DataArray(curve.moduli, dims=("relaxation_time",),
@@ -150,7 +230,8 @@ def dma_variables(curve: MasterCurve, wanted) -> dict:
 def dma_options(params) -> dict:
     """Reader options of the DMA file, from the [modulus] section."""
     spec = params["modulus"]
-    return dict(key="modulus", columns=spec["columns"], temperature_unit=spec["temperature_unit"],
+    return dict(key="modulus", columns=spec["column_names"] or spec["columns"], sheet=spec["sheet"],
+                temperature_unit=spec["temperature_unit"],
                 frequency_unit=spec["frequency_unit"], modulus_unit=spec["modulus_unit"],
                 loss_column=spec["loss_column"], frequency=spec["frequency"],
                 temperature_tolerance=spec["temperature_tolerance"], loss_from_tan_delta=loss_modulus_from_tan_delta)

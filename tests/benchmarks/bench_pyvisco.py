@@ -1,0 +1,174 @@
+"""Master curves from measured DMA sweeps: roughcontact's overlap shifts against pyvisco (PyPI, NREL)
+and against the instrument software's own shifts, on real data and on synthetic sweeps.
+
+    python tests/benchmarks/bench_pyvisco.py [--smoke]
+
+Data (tests/data/pyvisco/README.md; BSD-3, from pyvisco 2.1.3's PyPI sdist):
+  A  the Eplexor export freq_Eplexor_raw.xls / freq_user_raw.csv: 21 sweeps of a polymer, -50..100 degC,
+     0.1-100 Hz. Peer: pyvisco's shifts on the same file (master.get_aT, T_ref -5 degC; it shifts E').
+  B  the Eplexor software's master curve of another measurement (freq_Eplexor_master.xls), whose 21
+     sweeps are rebuilt from it (points consecutive in time; f / a_T is 0.1-100 Hz again). Peer: the
+     instrument's own shift list (WLF C1 = 13.50, C2 = 141.19 K about 25 degC), and pyvisco.
+  S  synthetic sweeps with a glassy plateau (tests/test_mastercurve.py, glassy_sweeps), 1 % noise,
+     true shifts known.
+For every set of shifts it prints, per sweep, log10 a_T (decades) and, as a common yardstick, the
+rms log10 distance between each sweep and its neighbour nearer T_ref after shifting (on E', over
+their overlap; `misfit`, decades): shifts that superpose the data better give a smaller misfit.
+Prints ratios and differences only; asserts nothing (tests/test_benchmarks.py runs --smoke).
+"""
+
+from __future__ import annotations
+
+import time
+import warnings
+
+import numpy as np
+from _bench import SMOKE, TESTS
+
+from roughcontact.physics import mastercurve as mc, viscoelastic as ve
+from roughcontact.readers import READERS
+
+DATA = TESTS / "data" / "pyvisco"
+
+
+def pair_misfit(logw, l1, sweep, log_a, j0):
+    """rms log10 E' distance of each sweep to its neighbour nearer j0 at the shifts log_a (decades)."""
+    out = np.full(log_a.size, np.nan)
+    for j in range(log_a.size):
+        if j == j0:
+            continue
+        ref = j - 1 if j > j0 else j + 1
+        a, b = sweep == ref, sweep == j
+        lo = max(logw[a].min(), logw[b].min() + log_a[j] - log_a[ref])
+        hi = min(logw[a].max(), logw[b].max() + log_a[j] - log_a[ref])
+        if hi <= lo:
+            continue  # no overlap at all
+        out[j] = np.sqrt(mc._pair_cost(logw[a], (l1[a],), logw[b], (l1[b],), log_a[j] - log_a[ref], False)[0])
+    return out
+
+
+def ours(T, sweep, omega, Ep, Epp, T_ref, quantity="storage"):
+    start = time.perf_counter()
+    fit = mc.build_master_curve(T, sweep, omega, Ep, Epp, T_ref, quantity=quantity)
+    return fit, time.perf_counter() - start
+
+
+def pyvisco_shifts(T, sweep, omega, Ep, Epp, T_ref):
+    """pyvisco 2.1.3's shifts (master.get_aT: power-law fits of E' of neighbours) and WLF fit, or None."""
+    try:
+        import pandas as pd
+        from pyvisco import master, shift
+    except ImportError:
+        return None
+    rows = pd.DataFrame({"f_set": omega / (2 * np.pi), "E_stor": Ep / 1e6, "E_loss": Epp / 1e6,
+                         "T": T[sweep] - 273.15, "Set": sweep})
+    rows["T_round"] = np.round(T[sweep] - 273.15).astype(int)
+    rows["omega"], rows["E_comp"] = omega, np.hypot(Ep, Epp) / 1e6
+    rows["tan_del"] = Epp / Ep
+    rows.domain, rows.modul = "freq", "E"
+    ref = int(round(T_ref - 273.15))
+    start = time.perf_counter()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        df_aT, _ = master.get_aT(rows, ref)
+        wlf = shift.fit_WLF(ref, df_aT)
+    return df_aT["log_aT"].to_numpy(float), float(wlf["C1"].iloc[0]), float(wlf["C2"].iloc[0]), \
+        time.perf_counter() - start
+
+
+def rebuilt_eplexor_master():
+    """The 21 sweeps behind freq_Eplexor_master.xls and the instrument's shifts (see the docstring)."""
+    import pandas as pd
+
+    path = DATA / "freq_Eplexor_master.xls"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        data = pd.read_excel(path, sheet_name="Exported Data", skiprows=[1]).sort_values("Time")
+        listed = pd.read_excel(path, sheet_name="Shiftlist", skiprows=3, header=None)
+    T_list, a_list = listed[0].to_numpy(float), listed[1].to_numpy(float)
+    cluster = np.r_[0, np.cumsum(np.diff(data["Time"].to_numpy()) > 1500)]
+    sweeps = []
+    for k in range(cluster.max() + 1):
+        part = data[cluster == k]
+        f = part["f"].to_numpy()
+        j = int(np.argmin([abs(np.log10(f.min() / 10 ** s / 0.1)) for s in a_list]))
+        order = np.argsort(f)
+        sweeps.append((T_list[j] + 273.15, a_list[j], f[order] / 10 ** a_list[j], part["E'"].to_numpy()[order] * 1e6,
+                       part["E''"].to_numpy()[order] * 1e6))
+    sweeps.sort(key=lambda s: s[0])
+    T = np.array([s[0] for s in sweeps])
+    sweep = np.concatenate([[i] * s[2].size for i, s in enumerate(sweeps)])
+    cat = lambda k: np.concatenate([s[k] for s in sweeps])  # noqa: E731
+    return T, sweep, 2 * np.pi * cat(2), cat(3), cat(4), np.array([s[1] for s in sweeps])
+
+
+def report(name, T, sweep, omega, Ep, Epp, T_ref, peers, quantities):
+    """Print the table of one data set: shifts of each method about the sweep nearest T_ref, the
+    difference to each peer, and the misfit yardstick."""
+    j0 = int(np.argmin(np.abs(T - T_ref)))
+    logw, l1 = np.log10(omega), np.log10(Ep)
+    rows = dict(peers)
+    times = {}
+    for q in quantities:
+        fit, seconds = ours(T, sweep, omega, Ep, Epp, T[j0], q)
+        rows[f"ours ({q})"] = (fit.log10_aT - fit.log10_aT[j0], fit.C1, fit.C2)
+        times[f"ours ({q})"] = seconds
+        flagged = ", ".join(f"{t - 273.15:.0f}" for t in T[fit.at_edge]) or "none"
+        print(f"  ours ({q}): {seconds:.2f} s; pairs flagged as not fixed by the overlap at T = {flagged} degC")
+    print(f"\n{name}: log10 a_T about {T[j0] - 273.15:.1f} degC (decades) and misfit to the neighbour (decades)")
+    names = list(rows)
+    print("  T (degC) | " + " | ".join(f"{n:>22}" for n in names))
+    misfit = {n: pair_misfit(logw, l1, sweep, rows[n][0] - rows[n][0][j0], j0) for n in names}
+    for j, t in enumerate(T):
+        cells = [f"{rows[n][0][j] - rows[n][0][j0]:8.2f} ({misfit[n][j]:.4f})" for n in names]
+        print(f"  {t - 273.15:8.1f} | " + " | ".join(f"{c:>22}" for c in cells))
+    print("  WLF C1, C2 (K) about the T_ref of each: " + "; ".join(
+        f"{n}: {rows[n][1]:.4g}, {rows[n][2]:.4g}" for n in names))
+    print("  median misfit (decades): " + "; ".join(f"{n}: {np.nanmedian(misfit[n]):.4f}" for n in names))
+    base = names[0]
+    for n in names[1:]:
+        d = (rows[n][0] - rows[n][0][j0]) - (rows[base][0] - rows[base][0][j0])
+        inside = np.abs(d) <= 0.3
+        print(f"  {n} - {base}: max |diff| {np.max(np.abs(d)):.2f} decades; within 0.3 decades at "
+              f"{inside.sum()}/{d.size} sweeps ({', '.join(f'{t - 273.15:.0f}' for t in T[inside])} degC)")
+    return rows, times
+
+
+def main() -> None:
+    quantities = ("storage",) if SMOKE else ("storage", "moduli", "tan_delta")
+    data = READERS["dma"](DATA / "freq_user_raw.csv", columns=("T", "f", "E_stor", "E_loss"))
+    T, sweep, omega, Ep, Epp = data.temperatures, data.sweep, data.omega, data.storage, data.loss
+    T_ref = T[np.argmin(np.abs(T - 268.15))]
+    peers = {}
+    pv = pyvisco_shifts(T, sweep, omega, Ep, Epp, T_ref)
+    if pv is None:
+        print("pyvisco is not installed (pip install --no-deps pyvisco==2.1.3): its column is left out")
+    else:
+        peers["pyvisco 2.1.3"] = pv[:3]
+        print(f"A: pyvisco get_aT + fit_WLF: {pv[3]:.2f} s")
+    report("A (Eplexor export, 21 sweeps)", T, sweep, omega, Ep, Epp, T_ref, peers, quantities)
+    if SMOKE:
+        return
+    try:
+        T, sweep, omega, Ep, Epp, listed = rebuilt_eplexor_master()
+    except ImportError:
+        print("pandas/xlrd missing: set B left out")
+    else:
+        peers = {"instrument (Eplexor)": (listed, 13.50, 141.19)}
+        pv = pyvisco_shifts(T, sweep, omega, Ep, Epp, 298.15)
+        if pv is not None:
+            peers["pyvisco 2.1.3"] = pv[:3]
+        report("B (Eplexor master rebuilt into its 21 sweeps)", T, sweep, omega, Ep, Epp, 298.15, peers, quantities)
+    from test_mastercurve import C1, C2, T_REF, glassy_sweeps
+
+    T, sweep, omega, Ep, Epp = glassy_sweeps(1)
+    peers = {"truth (WLF 10, 60 K)": (ve.wlf_log10_shift(T, T_REF, C1, C2), C1, C2)}
+    pv = pyvisco_shifts(T, sweep, omega, Ep, Epp, T_REF)
+    if pv is not None:
+        peers["pyvisco 2.1.3"] = pv[:3]
+    report("S (synthetic, glassy plateau, 1 % noise)", T, sweep, omega, Ep, Epp, T_REF, peers,
+           ("storage", "moduli", "tan_delta"))
+
+
+if __name__ == "__main__":
+    main()
