@@ -67,7 +67,8 @@ def compute_conductance(inp: StageInput) -> xr.Dataset:
     E_star = e_star(inp)
     K, D = up["contact_stiffness"], up["stiffness_length"]
     p = D["p"] if "p" in D.coords else xr.DataArray(float(inp["load.p"]))
-    ds = xr.Dataset()
+    # which separation law (and contact theory) the stiffness it rests on used
+    ds = xr.Dataset(attrs={k: v for k, v in up.attrs.items() if k.startswith(("separation_", "contact_"))})
     for kind, (conductance, resistance) in NAMES.items():
         R = _series(inp, kind)
         if R is None:
@@ -89,7 +90,7 @@ ASSUMPTIONS = ("heat / current only through the real contact (no gas, no radiati
 register(
     Stage(
         name="conductance",
-        version="1",
+        version="2",
         compute=compute_conductance,
         check=check_conductance,
         needs=("stiffness",),

@@ -24,7 +24,8 @@ from roughcontact.stage import Figure, Param, Stage, StageInput, Var, register, 
 
 from .bem import bem_band, bem_eta_values, check_bem, describe_bem, map_pairs, single_surfaces, solve_pair
 from .figures.interface_bem import figure_interface_bem
-from .leakage import NUMERICS as LEAKAGE_NUMERICS, SEAL_KEYS, leakage_settings, seal_parameters
+from .leakage import NUMERICS as LEAKAGE_NUMERICS, SEAL_KEYS, leakage_settings, leakage_theory_attrs, seal_parameters
+from .separation import check_separation
 from .shared.maps import check_eta, map_surfaces, topography_files
 from .shared.material import E_STAR, MATERIAL_KEYS, e_star
 from .stiffness import SEPARATION_KEYS, separation_settings
@@ -129,13 +130,19 @@ def _theory(inp, psd, band, p_values, eta_values, E_star) -> dict:
     _, _, s_cj, s_emt = leakage_kernel(q, C[:, None, :], p_values[None, :], **kw)
     seal = seal_parameters(inp)
     return {"stiffness": K[..., 0].T, "leak_cj": leak_rate(s_cj, *seal).T, "leak_emt": leak_rate(s_emt, *seal).T,
-            "seal_cj": sealing_pressure(q, C, E_star, kw["area"], q_cut),
-            "seal_emt": sealing_pressure(q, C, E_star, BRUGGEMAN_AREA, q_cut)}
+            "seal_cj": sealing_pressure(q, C, E_star, kw["area"], q_cut, kw["correction"], kw["gamma"]),
+            "seal_emt": sealing_pressure(q, C, E_star, BRUGGEMAN_AREA, q_cut, kw["correction"], kw["gamma"])}
 
 
 def _spectra(psd: xr.Dataset):
     single_surfaces(psd.sizes)
     return psd["psd_substrate"].values, psd["psd_solid"].values
+
+
+def check_interface_bem(inp: StageInput) -> None:
+    """The BEM's checks and the separation law's (a usable contact-correction gamma)."""
+    check_bem(inp)
+    check_separation(inp)
 
 
 def compute_interface_bem(inp: StageInput) -> xr.Dataset:
@@ -173,7 +180,7 @@ def compute_interface_bem(inp: StageInput) -> xr.Dataset:
     ds.attrs.update({"bem_zeta": band["zeta"], "bem_q_cut": band["q_cut"], "bem_grid": band["n"],
                      "bem_pixel_size": band["dx"], "bem_surfaces": "measured" if band["maps"] is not None else
                      "synthesized", "bem_band_limit": band["limit"], "leakage_aspect_ratio": seal_parameters(inp)[2]
-                     / seal_parameters(inp)[3]})
+                     / seal_parameters(inp)[3], **leakage_theory_attrs(inp, leakage_settings(inp, band["q_cut"]))})
     if "eta" not in psd["psd_combined"].dims:
         ds = ds.isel(eta=0, drop=True)
     return ds.isel(p=0) if np.ndim(inp["load.p"]) == 0 else ds
@@ -185,9 +192,9 @@ _NAN = "NaN where the bracket is not found: closed at every load asked for, or o
 register(
     Stage(
         name="interface_bem",
-        version="1",
+        version="2",
         compute=compute_interface_bem,
-        check=check_bem,
+        check=check_interface_bem,
         describe=describe_bem,
         needs=("psd",),
         reads=(*MATERIAL_KEYS, "load.p", *BEM_KEYS, *SEPARATION_KEYS, *SEAL_KEYS, "leakage.percolation_area",

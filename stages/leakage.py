@@ -27,6 +27,8 @@ from roughcontact.stage import (
 )
 
 from .figures.interface import figure_leakage
+from .separation import check_separation, theory_attrs
+from .shared.magnification import area_correction
 from .shared.material import MATERIAL_KEYS, e_star
 from .stiffness import SEPARATION_KEYS, separation_settings
 
@@ -52,8 +54,8 @@ register_params(
     "numerics",
     Param("leakage_bins_per_decade", "int", default=20, lo=2, hi=400, presets={"fast": 10, "accurate": 40},
           ladder=(5, 10, 20, 40, 80), doc="logarithmic bins per decade of the gap u in P(u) (effective medium)"),
-    Param("leakage_points_per_decade", "int", default=10, lo=1, presets={"fast": 5, "accurate": 20},
-          ladder=(3, 5, 10, 20, 40), doc="magnifications 1 + delta per decade of delta at which P(u) is resolved"),
+    Param("leakage_points_per_decade", "int", default=20, lo=1, presets={"fast": 10, "accurate": 40},
+          ladder=(5, 10, 20, 40, 80), doc="magnifications 1 + delta per decade of delta at which P(u) is resolved"),
 )
 
 SEAL_KEYS = ("leakage.viscosity", "leakage.pressure_drop", "leakage.seal_width", "leakage.seal_length")
@@ -65,10 +67,25 @@ def leakage_settings(inp: StageInput, q_top: float) -> dict:
     band [qL, q_top]."""
     settings = separation_settings(inp)
     alpha, refinement = settings.pop("alpha"), settings.pop("refinement")
+    correction, gamma = area_correction(inp)
     return dict(E_star=e_star(inp), alpha=alpha, refinement=refinement, numerics=settings,
-                area=float(inp["leakage.percolation_area"]), q_top=q_top,
+                area=float(inp["leakage.percolation_area"]), q_top=q_top, correction=correction, gamma=gamma,
                 bins_per_decade=inp["numerics.leakage_bins_per_decade"],
                 points_per_decade=inp["numerics.leakage_points_per_decade"])
+
+
+def leakage_theory_attrs(inp: StageInput, kw: dict) -> dict:
+    """Which theory the leak rates used: the contact-area theory of A(zeta)/A0 (``contact_correction``,
+    ``contact_gamma``), the separation law (:func:`roughcontact.stages.separation.theory_attrs`) and
+    the gap distribution of the effective medium."""
+    return {**theory_attrs(inp, {"alpha": kw["alpha"], "refinement": kw["refinement"]}),
+            "contact_correction": kw["correction"], "contact_gamma": "none" if kw["gamma"] is None else kw["gamma"],
+            "gap_distribution": GAP_DISTRIBUTION}
+
+
+#: what the effective medium's P(u) is (docs/interface.md)
+GAP_DISTRIBUTION = ("Almqvist et al. 2011 reflected normals of the finer roughness's width, each with the mean gap "
+                    "that conserves the volume A u_bar: the mean of P(u) is the mean separation u_bar")
 
 
 def seal_parameters(inp: StageInput) -> tuple[float, float, float, float]:
@@ -89,8 +106,9 @@ def compute_leakage(inp: StageInput) -> xr.Dataset:
     ds = xr.Dataset({"critical_magnification": zeta_c, "critical_gap": u1, "flow_factor_critical_junction": s_cj,
                      "flow_factor_effective_medium": s_emt})
     for method, area in (("critical_junction", kw["area"]), ("effective_medium", BRUGGEMAN_AREA)):
-        ds[f"sealing_pressure_{method}"] = xr.apply_ufunc(sealing_pressure, q, C, kw["E_star"], area,
-                                                           input_core_dims=[["q"], ["q"], [], []])
+        ds[f"sealing_pressure_{method}"] = xr.apply_ufunc(
+            sealing_pressure, q, C, kw["E_star"], area, None, kw["correction"], kw["gamma"],
+            input_core_dims=[["q"], ["q"], [], [], [], [], []])
         ds[f"leak_rate_{method}"] = xr.apply_ufunc(leak_rate, ds[f"flow_factor_{method}"], *seal_parameters(inp),
                                                    dask="parallelized", output_dtypes=[float])
     ds["critical_magnification"].attrs = {
@@ -98,7 +116,7 @@ def compute_leakage(inp: StageInput) -> xr.Dataset:
                       "at any magnification (the seal is closed; critical_gap and the leak rate are 0)"}
     width, length = seal_parameters(inp)[2:]
     ds.attrs.update({"leakage_percolation_area": kw["area"], "leakage_bruggeman_area": BRUGGEMAN_AREA,
-                     "leakage_aspect_ratio": width / length})
+                     "leakage_aspect_ratio": width / length, **leakage_theory_attrs(inp, kw)})
     if "p" in ds.dims:
         ds = ds.transpose(..., "p")
     return ds
@@ -118,8 +136,9 @@ FLOW = "Q = (W/L) sigma dp / (12 mu), sigma = "
 register(
     Stage(
         name="leakage",
-        version="1",
+        version="2",
         compute=compute_leakage,
+        check=check_separation,
         needs=("psd",),
         reads=(*MATERIAL_KEYS, "load.p", *SEPARATION_KEYS, *SEAL_KEYS, "leakage.percolation_area", *NUMERICS),
         outputs={
@@ -128,10 +147,9 @@ register(
                                                tolerance=1e-4),
             "leak_rate_effective_medium": Var("m^3/s", "leak rate of the seal, effective-medium theory "
                                                        "(Lorenz & Persson 2010)",
-                                              attrs={"formula": FLOW + "Bruggeman"}),
+                                              attrs={"formula": FLOW + "Bruggeman", "comment": GAP_DISTRIBUTION}),
             "flow_factor_critical_junction": Var("m^3", "effective flow factor u1^3 of the critical junction"),
-            "flow_factor_effective_medium": Var("m^3", "effective flow factor sigma of Bruggeman's 2D effective "
-                                                       "medium"),
+            "flow_factor_effective_medium": Var("m^3", "Bruggeman's 2D effective flow factor sigma"),
             "critical_magnification": Var("1", "magnification zeta_c at which the non-contact area percolates, "
                                                "A(zeta_c)/A0 = leakage.percolation_area"),
             "critical_gap": Var("m", "separation u1(zeta_c) of the critical constriction"),

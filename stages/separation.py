@@ -93,6 +93,20 @@ def separation_variant(inp: StageInput) -> tuple[float, str]:
     return (alpha, "none") if name == "persson" else (gamma, name)
 
 
+def theory_attrs(inp: StageInput, settings: dict) -> dict:
+    """The result's attributes that say which separation law was used: ``separation_refinement``
+    (the variant of eq 57), ``separation_alpha``, ``contact_correction`` (whether eq 57 uses it) and,
+    with refinement "contact", ``separation_refinement_source`` (the contact correction it came from)."""
+    attrs = {"separation_refinement": settings["refinement"], "separation_alpha": settings["alpha"]}
+    name = area_correction(inp)[0]
+    if inp["separation.refinement"] == "contact":
+        attrs["separation_refinement_source"] = f"contact: from contact.correction = {name}"
+        attrs["contact_correction"] = name
+    else:
+        attrs["contact_correction"] = f"{name} (not used by eq 57: separation.refinement = {settings['refinement']})"
+    return attrs
+
+
 def check_separation(inp: StageInput) -> None:
     """With refinement "contact", the contact correction's gamma must be usable."""
     if inp["separation.refinement"] == "contact":
@@ -159,7 +173,7 @@ def compute_separation(inp: StageInput) -> xr.Dataset:
     beta.attrs = _beta_attrs(refinement)
     ds = xr.Dataset({"mean_separation": u, "separation_u0": u0, "separation_beta": beta,
                      "E_star": xr.DataArray(E_star), "qL": xr.DataArray(q[0])})
-    ds.attrs.update({"separation_alpha": alpha, "separation_refinement": refinement, "separation_epsilon": EPSILON})
+    ds.attrs.update({**theory_attrs(inp, {"alpha": alpha, "refinement": refinement}), "separation_epsilon": EPSILON})
     return ds
 
 
@@ -169,11 +183,11 @@ def _beta_attrs(refinement: str) -> dict:
              "wang_mueser": " times exp(sum_k c_k Jk(0) / alpha), c_2 = -2/3, c_4 = 5 (11/9 - alpha), "
                             "J2(0) = %.10f, J4(0) = %.10f" % (float(power_J(0.0, 2)), float(power_J(0.0, 4)))}
     return {
-        "formula": ("beta = eps exp(-int q^2 C w ln w dq / int q^2 C w dq), eps = exp(-gamma_Euler/2)"
-                    + extra[refinement]),
+        "formula": "beta = eps exp(-int q^2 C w ln w dq / int q^2 C w dq), eps = exp(-gamma_Euler/2)"
+                   + extra[refinement],
         "epsilon": EPSILON,
-        "sign_note": "eq 60 of the seed lost the minus sign in the exponent; restored here (docs/theory.md, section "
-                     "'Separation')",
+        "sign_note": "eq 60 of the seed lost the minus sign in the exponent; restored here (docs/theory.md, "
+                     "section 'Separation')",
         "nan_reason": "beta is NaN where the combined PSD is identically zero up to zeta qL (e.g. eta = 1 with "
                       "identical surfaces): then u = 0 and u0 = 0 at every pressure and p = beta E* exp(-u/u0) "
                       "has no meaning",
@@ -183,7 +197,7 @@ def _beta_attrs(refinement: str) -> dict:
 STAGE = register(
     Stage(
         name="separation",
-        version="2",
+        version="3",
         compute=compute_separation,
         check=check_separation,
         describe=describe_separation,

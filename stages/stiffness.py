@@ -14,22 +14,24 @@ import xarray as xr
 
 from roughcontact.physics.interface import stiffness_from_psd
 from roughcontact.physics.separation import REFINEMENTS
-from roughcontact.stage import Figure, Shape, Stage, StageInput, UserError, Var, register
+from roughcontact.stage import Figure, Shape, Stage, StageInput, Var, register
 
 from .figures.interface import figure_stiffness
-from .shared.magnification import zeta_values
+from .separation import check_separation, separation_variant, theory_attrs
+from .shared.magnification import CORRECTION_KEYS, zeta_values
 from .shared.material import E_STAR, MATERIAL_KEYS, e_star
 
-#: the scene keys of eq 57 and its quadrature (declared by the separation stage)
+#: the scene keys of eq 57 and its quadrature (declared by the separation stage); refinement
+#: "contact" takes the variant (and its gamma as alpha) from contact.correction
 SEPARATION_KEYS = ("separation.alpha", "separation.refinement", "numerics.separation_panels_per_decade",
-                   "numerics.separation_gauss_points", "numerics.separation_depth")
+                   "numerics.separation_gauss_points", "numerics.separation_depth", *CORRECTION_KEYS)
 
 
 def separation_settings(inp: StageInput) -> dict:
-    """The separation law's parameters (alpha, refinement) and quadrature, as kernel keywords."""
-    if np.any(~(np.atleast_1d(np.asarray(inp["load.p"], dtype=float)) > 0)):
-        raise UserError("pressures must be > 0", key="load.p")
-    return {"alpha": float(inp["separation.alpha"]), "refinement": inp["separation.refinement"],
+    """The separation law's parameters (alpha, refinement: "contact" resolved to the contact
+    correction's variant) and quadrature, as kernel keywords."""
+    alpha, refinement = separation_variant(inp)
+    return {"alpha": alpha, "refinement": refinement,
             "panels_per_decade": inp["numerics.separation_panels_per_decade"],
             "order": inp["numerics.separation_gauss_points"], "depth": float(inp["numerics.separation_depth"])}
 
@@ -55,13 +57,15 @@ def compute_stiffness(inp: StageInput) -> xr.Dataset:
     K.attrs = {"formula": "K = p / D, D = -du/dln p = sqrt(pi) alpha int q^2 C w exp(-(w p/E*)^2) dq",
                "alpha": settings["alpha"], "refinement": settings["refinement"],
                "refinement_description": REFINEMENTS[settings["refinement"]]}
+    ds_attrs = theory_attrs(inp, settings)
     D.attrs = {"formula": "D = -p du/dp = (2 alpha/sqrt(pi)) int_0^(1/w) exp(-(p/(E* s))^2) ds/q(s) "
                           "(+ tail in closed form)"}
     u0 = inp.upstream["separation"]["separation_u0"]
     with np.errstate(divide="ignore"):
         small = xr.apply_ufunc(np.divide, p, u0, dask="parallelized", output_dtypes=[float])
     return xr.Dataset({"contact_stiffness": K, "stiffness_length": D, "small_load_stiffness": small.transpose(*order),
-                       "E_star": xr.DataArray(E_star)})
+                       "E_star": xr.DataArray(E_star)}, attrs=ds_attrs)
+
 
 
 def describe_stiffness(inp: StageInput) -> Shape:
@@ -81,8 +85,9 @@ INFINITE = ("+inf where the interface adds no compliance: the surfaces fit exact
 register(
     Stage(
         name="stiffness",
-        version="1",
+        version="2",
         compute=compute_stiffness,
+        check=check_separation,
         needs=("psd", "separation"),
         reads=(*MATERIAL_KEYS, "load.p", "contact.zeta", *SEPARATION_KEYS),
         outputs={
