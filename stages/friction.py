@@ -92,7 +92,8 @@ def _attrs(grid, needed_hi: float, n_phi: int, n_seg: int, S_text: str, nu: floa
         "modulus_omega_range": f"{grid[0]:.6g} {grid[-1]:.6g} rad/s",
         "modulus_extrapolated": ("yes: frequencies above the modulus grid use E' constant, E'' ~ 1/omega"
                                  if needed_hi > grid[-1] else "no (above); below the grid E'' ~ omega"),
-        "equations": "docs/theory.md, section 'Friction' (seed eqs 29-32, 61-62 with the eq 30 and eq 32/62 misprints corrected)",
+        "equations": ("docs/theory.md, section 'Friction' (seed eqs 29-32, 61-62 with the eq 30 and eq 32/62 misprints "
+                      "corrected)"),
     }
 
 
@@ -163,7 +164,7 @@ def compute_friction(inp: StageInput) -> xr.Dataset:
 STAGE = register(
     Stage(
         name="friction",
-        version="2",
+        version="3",
         compute=compute_friction,
         needs=("modulus", "psd"),
         check=check_flash,

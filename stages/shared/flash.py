@@ -22,7 +22,8 @@ FLASH_PARAMS = (
           doc="flash temperature (Persson 2006): the modulus at each scale is read at the temperature of the contacts"),
     Param("thermal_conductivity", "quantity", "W/(m*K)", default=None, lo=0.0, lo_open=True,
           doc="thermal conductivity of the rubber (needed with flash)"),
-    Param("density", "quantity", "kg/m^3", default=None, lo=0.0, lo_open=True, doc="mass density of the rubber (needed with flash)"),
+    Param("density", "quantity", "kg/m^3", default=None, lo=0.0, lo_open=True,
+          doc="mass density of the rubber (needed with flash)"),
     Param("heat_capacity", "quantity", "J/(kg*K)", default=None, lo=0.0, lo_open=True,
           doc="specific heat capacity of the rubber (needed with flash)"),
     Param("background", "choice", default="none", choices=("none", "semi_infinite"),
@@ -34,9 +35,11 @@ FLASH_PARAMS = (
 
 #: numerics of the flash temperature (registered in [numerics] by the friction stage)
 FLASH_NUMERICS = (
-    Param("flash_shift_step", "quantity", "", default=0.05, lo=0.0, lo_open=True, presets={"fast": 0.1, "accurate": 0.02},
+    Param("flash_shift_step", "quantity", "", default=0.05, lo=0.0, lo_open=True,
+          presets={"fast": 0.1, "accurate": 0.02},
           ladder=(0.4, 0.2, 0.1, 0.05, 0.05, 0.03, 0.02, 0.01, 0.005),
-          doc="largest change of log10 a_T per q step of the flash-temperature march (finer sub-steps where it heats fast)"),
+          doc="largest change of log10 a_T per q step of the flash-temperature march "
+              "(finer sub-steps where it heats fast)"),
     Param("flash_time_nodes", "int", default=16, lo=3, presets={"fast": 10, "accurate": 24},
           doc="time nodes of the background-heating march (geometric over 6 decades of the sliding time)"),
 )
@@ -73,7 +76,8 @@ def check_flash(inp) -> tuple[float, float, float] | None:
     for name in ("thermal_conductivity", "density", "heat_capacity"):
         values[name] = inp[f"friction.{name}"]
         if values[name] is None:
-            raise UserError(f"the flash temperature needs the rubber's {name.replace('_', ' ')}", key=f"friction.{name}")
+            raise UserError(f"the flash temperature needs the rubber's {name.replace('_', ' ')}",
+                            key=f"friction.{name}")
     if inp["friction.background"] != "none" and inp["friction.sliding_distance"] is None:
         raise UserError("background heating needs the sliding distance", key="friction.sliding_distance")
     if inp["friction.background"] == "none" and "background_temperature_rise" in inp.wanted:
@@ -147,7 +151,7 @@ def compute_flash(inp, q, C, v, p, mod, nu, thermal, n_phi, n_seg, correction, g
     )
     names = ["friction_coefficient", "sliding_contact_area_ratio", "flash_temperature", "background_temperature_rise",
              "flash_temperature_profile", "frictional_heating"]
-    result = dict(zip(names, outputs))
+    result = dict(zip(names, outputs, strict=False))
     return {name: value for name, value in result.items()
             if name in ("friction_coefficient", "sliding_contact_area_ratio") or name in inp.wanted}
 
@@ -158,8 +162,10 @@ def flash_attrs(inp, thermal) -> dict:
     background = inp["friction.background"]
     return {
         "flash_temperature_model": (
-            "Persson (2006) flash temperature: dT/dq = 2 v q^2 C S B(q; T_q) Theta(pi D q / v) / ((1 - nu^2) lambda), "
-            "T_q marched in q (trapezoid steps solved by the root finder), E read at (q v cos phi, T_q); "
+            "Persson (2006) flash temperature, heat released in the deformed layer (depth 1/q): "
+            "dT/dq = 2 v q^2 C S B(q; T_q) Theta(pi D q / v) / ((1 - nu^2) lambda), Theta from x/2 (adiabatic layer) "
+            "to 1/2 (steady spreading); T_q marched in q (trapezoid steps solved by the root finder), "
+            "E read at (q v cos phi, T_q); "
             "docs/theory.md, section 'Flash temperature'"),
         "thermal_properties": f"lambda = {lam:.6g} W/(m K), D = {D:.6g} m^2/s, effusivity = {e:.6g} W s^0.5/(m^2 K)",
         "background_heating": ("none" if background == "none" else
