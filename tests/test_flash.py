@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 import sys
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -19,7 +20,7 @@ import pytest
 from scipy import integrate, linalg
 
 from roughcontact import engine, scene as scenes
-from roughcontact.errors import UserError
+from roughcontact.errors import SceneWarning, UserError
 from roughcontact.physics import flash, friction as fr, viscoelastic as ve
 from roughcontact.physics.quadrature import integral, log_grid
 
@@ -304,3 +305,30 @@ def test_bad_flash_input_names_the_key(tmp_path, overrides, key):
     with pytest.raises(UserError) as err:
         _run(_scene(**overrides), tmp_path)
     assert err.value.key == key
+
+
+DMA_FILE = Path(__file__).resolve().parents[1] / "pipeline" / "scenes" / "data" / "dma_example.txt"
+
+
+def _dma_scene(T, v):
+    """The DMA example (sweeps from -35 to 60 degC, WLF fitted to them) with the flash temperature."""
+    return _scene(**THERMAL, **{"modulus": {"kind": "dma", "sweeps": str(DMA_FILE), "T_ref": "-20 degC", "T": T,
+                                            "fit": "wlf"},
+                                "friction.v": v, "numerics.points_per_decade": 10,
+                                "outputs.variables": ["friction_coefficient", "flash_temperature"]})
+
+
+def test_contacts_beyond_the_dma_sweeps_warn_with_the_data_range(tmp_path):
+    """A user relies on this: when the flash temperature takes the contacts beyond the temperatures
+    the WLF law was fitted on, the run says so, naming the sweeps' range and how far outside it the
+    contacts go; inside the range it stays silent."""
+    with pytest.warns(SceneWarning) as caught:
+        fric = _run(_dma_scene("55 degC", ["1e-6 m/s", "100 m/s"]), tmp_path / "hot")
+    hot = float(fric["flash_temperature"].max()) - 273.15
+    assert hot > 61.0
+    message = str(caught[0].message)
+    assert "-35 degC to 60 degC" in message and f"reach {hot:.0f} degC" in message
+    assert f"{hot - 60.0:.0f} K above the warmest" in message and "from v = 100 m/s on" in message
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", SceneWarning)
+        _run(_dma_scene("25 degC", ["1e-6 m/s", "0.01 m/s"]), tmp_path / "cool")

@@ -9,12 +9,14 @@ and calls :func:`compute_flash` when ``friction.flash = true``.
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import xarray as xr
 
 from roughcontact.physics.flash import background_march, flash_friction_kernel
 from roughcontact.physics.viscoelastic import shift_factors
-from roughcontact.stage import Param, UserError, Var
+from roughcontact.stage import Param, SceneWarning, UserError, Var
 
 #: keys of [friction] for the flash temperature (declared in the friction section)
 FLASH_PARAMS = (
@@ -134,6 +136,63 @@ def _kernel(q, C, v, T_s, grid, Ep, Epp, p, nu, *, law, thermal, n_phi, correcti
     return (out[0], out[1], out[2], np.broadcast_to(rise, np.shape(out[0]))) + tuple(out[3:])
 
 
+def data_temperature_range(mod: xr.Dataset) -> tuple[float, float, str] | None:
+    """(T_min, T_max, what) of the measurements behind the modulus' temperature law, in K: the DMA
+    sweeps' temperatures (the WLF law or shifts fitted to them), or a given shift table's; None
+    when the law is not tied to data (WLF with given constants, no shift)."""
+    if mod.attrs.get("model") == "dma" and "sweep_temperature_range" in mod.attrs:
+        lo, hi, _ = str(mod.attrs["sweep_temperature_range"]).split()
+        return float(lo), float(hi), "DMA sweeps"
+    if mod.attrs.get("model") == "dma":
+        temps = mod["shift_T"].values if "shift_T" in mod.coords else (
+            mod["dma_temperature"].values if "dma_temperature" in mod else None)
+        what = "DMA sweeps"
+    elif mod.attrs.get("horizontal_shift") == "table" and "shift_T" in mod.coords:
+        temps, what = mod["shift_T"].values, "shift table"
+    else:
+        return None
+    if temps is None or np.size(temps) == 0:
+        return None
+    return float(np.min(temps)), float(np.max(temps)), what
+
+
+def _celsius(T: float) -> str:
+    return f"{T - 273.15:.0f} degC"
+
+
+def warn_outside_data(T_contact: xr.DataArray, v: xr.DataArray, mod: xr.Dataset, tolerance: float = 1.0) -> None:
+    """A SceneWarning when the contacts' temperature leaves the temperature range of the data the
+    modulus' temperature law was fitted to by more than ``tolerance`` K: the modulus there is
+    extrapolated (WLF beyond the sweeps; a table's a_T held constant)."""
+    data = data_temperature_range(mod)
+    if data is None:
+        return
+    lo, hi, what = data
+    T = np.asarray(T_contact.values, dtype=float)
+    over, under = float(np.nanmax(T)) - hi, lo - float(np.nanmin(T))
+    if max(over, under) <= tolerance:
+        return
+    outside = (T_contact > hi + tolerance) | (T_contact < lo - tolerance)
+    other = [d for d in outside.dims if d != "v"]
+    if "v" in outside.dims:
+        hit = outside.any(other) if other else outside
+        speed = f"from v = {float(v.where(hit, drop=True).min()):.3g} m/s on" if bool(hit.any()) else ""
+    else:
+        speed = f"at v = {float(v):.3g} m/s"
+    if over >= under:
+        extreme, side, end = float(np.nanmax(T)), f"{over:.0f} K above", "warmest"
+    else:
+        extreme, side, end = float(np.nanmin(T)), f"{under:.0f} K below", "coldest"
+    if what == "DMA sweeps":
+        law, fix = "the WLF law fitted to the sweeps, extrapolated beyond the data", "add sweeps at those temperatures"
+    else:
+        law, fix = "a_T held at the table's end value", "extend modulus.shift_T"
+    warnings.warn(SceneWarning(
+        f"friction.flash: the contacts leave the temperature range of the {what} ({_celsius(lo)} to "
+        f"{_celsius(hi)}) {speed} and reach {_celsius(extreme)}, {side} the {end} one; there the modulus is "
+        f"{law}: treat mu at those speeds as an extrapolation, or {fix}"), stacklevel=2)
+
+
 def compute_flash(inp, q, C, v, p, mod, nu, thermal, n_phi, n_seg, correction, gamma, area=("persson", None)):
     """The friction with the flash temperature over the sweep: a dict of DataArrays (mu, A/A0,
     the flash temperature, the background rise and, if asked, the profiles over q)."""
@@ -152,6 +211,7 @@ def compute_flash(inp, q, C, v, p, mod, nu, thermal, n_phi, n_seg, correction, g
     names = ["friction_coefficient", "sliding_contact_area_ratio", "flash_temperature", "background_temperature_rise",
              "flash_temperature_profile", "frictional_heating"]
     result = dict(zip(names, outputs, strict=False))
+    warn_outside_data(result["flash_temperature"], v, mod)
     return {name: value for name, value in result.items()
             if name in ("friction_coefficient", "sliding_contact_area_ratio") or name in inp.wanted}
 
