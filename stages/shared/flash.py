@@ -194,8 +194,8 @@ def warn_outside_data(T_contact: xr.DataArray, v: xr.DataArray, mod: xr.Dataset,
 
 
 def compute_flash(inp, q, C, v, p, mod, nu, thermal, n_phi, n_seg, correction, gamma, area=("persson", None)):
-    """The friction with the flash temperature over the sweep: a dict of DataArrays (mu, A/A0,
-    the flash temperature, the background rise and, if asked, the profiles over q)."""
+    """The friction with the flash temperature over the sweep: a dict of DataArrays (mu, A/A0 and
+    the flash temperature always; the background rise and the profiles over q if asked)."""
     profile = bool({"flash_temperature_profile", "frictional_heating"} & inp.wanted)
     background = inp["friction.background"]
     kwargs = dict(law=temperature_law(mod), thermal=thermal, n_phi=n_phi, correction=correction, gamma=gamma,
@@ -212,8 +212,8 @@ def compute_flash(inp, q, C, v, p, mod, nu, thermal, n_phi, n_seg, correction, g
              "flash_temperature_profile", "frictional_heating"]
     result = dict(zip(names, outputs, strict=False))
     warn_outside_data(result["flash_temperature"], v, mod)
-    return {name: value for name, value in result.items()
-            if name in ("friction_coefficient", "sliding_contact_area_ratio") or name in inp.wanted}
+    always = ("friction_coefficient", "sliding_contact_area_ratio", "flash_temperature")
+    return {name: value for name, value in result.items() if name in always or name in inp.wanted}
 
 
 def flash_attrs(inp, thermal) -> dict:
