@@ -6,11 +6,13 @@ Picture (Persson, J. Phys.: Condens. Matter 18, 7789 (2006); general form with h
 in Fortunato et al., J. Phys.: Condens. Matter 27, 175008 (2015)): the roughness of wavenumber q
 deforms the rubber in the contact spots seen at magnification q (diameter ~ pi/q, area fraction
 P(q)); the power it dissipates per unit nominal area, sigma0 v dmu/dq dq, is released in those
-spots, so the heat flux there is J(q) dq = sigma0 v (dmu/dq) dq / P(q). It diffuses into the rubber
-(conductivity lambda, diffusivity D = lambda/(rho c)). The smaller spots of every higher q lie
-inside the larger ones and feel their temperature: T_q depends only on the dissipation at q' < q.
-The temperature rise of one scale is that of a surface heat flux of wavenumber q' switched on for
-the passage time t0 = (pi/q')/v of a spot, averaged over the passage:
+spots, J(q) dq = sigma0 v (dmu/dq) dq / P(q) per unit contact area, and it is released in the
+volume of the deformed layer (depth about 1/q: a source J q e^{-q z}), not on the surface. It
+diffuses into the rubber in depth and laterally (conductivity lambda, diffusivity D = lambda/(rho c)).
+The smaller spots of every higher q lie inside the larger ones and feel their temperature: T_q
+depends only on the dissipation at q' < q. The temperature rise of one scale is the surface
+temperature of that layer source, of lateral wavenumber q', switched on for the passage time
+t0 = (pi/q')/v of a spot, averaged over the passage:
 
 .. math::
 
@@ -19,8 +21,11 @@ the passage time t0 = (pi/q')/v of a spot, averaged over the passage:
                    \\Theta\\Big(\\frac{\\pi D q}{v}\\Big),
 
 with B the angular integral of cos(phi) E''(q v cos phi, T_q) (:mod:`roughcontact.physics.friction`)
-and Theta(x) = [(x - 1/2) erf(sqrt x) + sqrt(x/pi) e^-x] / x the passage average of
-erf(q sqrt(D t)) (1D short-time limit (4/3 sqrt(pi)) sqrt x, steady 3D limit 1).
+and Theta(x) the passage average of :func:`layer_surface_temperature` (:func:`passage_average`):
+x/2 for x -> 0 (fast sliding, adiabatic heating of the layer: dT/dq = pi q^3 C S B / ((1 - nu^2) rho c),
+bounded in v) and 1/2 for x -> inf (slow sliding, steady spreading). An earlier version put the heat
+on the surface (Theta -> (4/(3 sqrt pi)) sqrt x), which overstated the rise by a factor growing like
+sqrt(v) at speed.
 
 This is an initial-value problem in q, T(q0) = T_start, solved by marching the q grid: each step
 is the trapezoid rule of the project's power-law quadrature, implicit in T and solved by the one
@@ -33,6 +38,7 @@ Duhamel integral of the mean flux mu sigma0 v into a semi-infinite rubber, march
 
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
 
 import numpy as np
@@ -45,19 +51,64 @@ from .roots import illinois
 from .special import erf
 from .volterra import abel_weights
 
-_SERIES = np.array([(-1.0) ** n / (np.prod(np.arange(1, n + 1)) * (2 * n + 1) * (n + 1.5)) for n in range(8)])
+#: series of E2(x) = int_0^x (x - s) erf(sqrt s) ds = (2/sqrt pi) sum_n c_n x^(n + 5/2) (small x)
+_SERIES2 = np.array([(-1.0) ** n / (math.factorial(n) * (2 * n + 1) * (n + 1.5) * (n + 2.5)) for n in range(12)])
+_SMALL = 0.2  # below: the series (14 digits with 12 terms); above: the closed form (no cancellation left)
+
+
+def layer_surface_temperature(a):
+    """theta(a): surface temperature of the rubber heated in a layer, in units of J / (lambda q).
+
+    A heat source J q e^{-q z} cos(q x) (W/m^3; depth z, J the power per unit area of the contact,
+    released in a layer of depth 1/q) switched on at t = 0 in a half-space with an insulated
+    surface, observed at the surface under the hot spot:
+
+    .. math:: T(0, t) = \\frac{J}{\\lambda q}\\,\\theta(a), \\qquad
+              \\theta(a) = \\int_0^a \\mathrm{erfc}\\sqrt b\\,db
+              = a - (a - \\tfrac12)\\,\\mathrm{erf}\\sqrt a - \\sqrt{a/\\pi}\\,e^{-a},
+              \\qquad a = D q^2 t.
+
+    theta = a for a -> 0 (adiabatic heating of the layer, rho c dT/dt = J q) and -> 1/2 for
+    a -> inf (steady spreading, half the value J / (lambda q) of the same power put on the
+    surface: the heat is released at the mean depth 1/q).
+
+    Parameters
+    ----------
+    a : array
+        D q^2 t, the diffusion time over the layer's depth (dimensionless, >= 0).
+
+    Returns
+    -------
+    array
+        theta (dimensionless, in [0, 1/2)).
+
+    References
+    ----------
+    docs/theory.md, section "Flash temperature"; Persson, J. Phys.: Condens. Matter 18, 7789 (2006)
+    (heat produced in the volume of the deformed layer).
+    """
+    a = np.asarray(a, dtype=float)
+    small = a < 1e-4
+    ab = np.clip(a, 1e-4, 1e12)
+    with np.errstate(under="ignore"):
+        closed = ab - (ab - 0.5) * erf(np.sqrt(ab)) - np.sqrt(ab / np.pi) * np.exp(-ab)
+    s = np.where(small, a, 0.0)
+    return np.where(small, s - 4.0 / (3.0 * np.sqrt(np.pi)) * s ** 1.5 * (1.0 - 0.2 * s), closed)
 
 
 def passage_average(x):
-    """Theta(x): the mean over a spot's passage of the temperature factor erf(q sqrt(D t)).
+    """Theta(x): the mean over a spot's passage (t from 0 to t0 = pi/(q v)) of the temperature factor
+    theta(D q^2 t) of :func:`layer_surface_temperature`.
 
-    .. math:: \\Theta(x) = \\frac1x\\int_0^x \\mathrm{erf}(\\sqrt s)\\,ds
-              = \\frac{(x - \\tfrac12)\\,\\mathrm{erf}\\sqrt x + \\sqrt{x/\\pi}\\,e^{-x}}{x},
+    .. math:: \\Theta(x) = \\frac1x\\int_0^x\\theta(a)\\,da
+              = \\frac1x\\Big[\\frac{x^2}{2}\\,\\mathrm{erfc}\\sqrt x
+                + \\Big(\\frac x2 - \\frac38\\Big)\\mathrm{erf}\\sqrt x
+                - \\Big(\\frac{x^{3/2}}{2} - \\frac{3\\sqrt x}{4}\\Big)\\frac{e^{-x}}{\\sqrt\\pi}\\Big],
               \\qquad x = \\pi D q / v,
 
-    (a series for x < 0.05, where the closed form cancels). Theta ~ (4 / (3 sqrt pi)) sqrt x for
-    x -> 0 (heat stays within the depth sqrt(D t0) < 1/q: 1D diffusion) and -> 1 for x -> inf
-    (steady spreading over the spot size 1/q).
+    (a series below x = 0.2, where the closed form cancels). Theta ~ x/2 - (8/(15 sqrt pi)) x^(3/2)
+    for x -> 0 (fast sliding: the layer heats adiabatically, the mean rise over the passage being
+    J q t0 / (2 rho c)) and 1/2 - 3/(8x) for x -> inf (slow sliding: steady spreading).
 
     Parameters
     ----------
@@ -68,30 +119,36 @@ def passage_average(x):
     Returns
     -------
     array
-        Theta (dimensionless, in [0, 1)).
+        Theta (dimensionless, in [0, 1/2), increasing, below x/2).
 
     References
     ----------
-    docs/theory.md, section "Flash temperature"; Carslaw & Jaeger, Conduction of Heat in Solids
-    (1959), section 2.9 (surface flux on a half-space).
+    docs/theory.md, section "Flash temperature"; Persson, J. Phys.: Condens. Matter 18, 7789 (2006).
     """
     x = np.asarray(x, dtype=float)
-    small = x < 0.05
-    xs = np.clip(np.where(small, 1.0, x), 0.05, 1e12)  # Theta = 1 - 1/(2x) to rounding beyond 1e12
-    series = (2.0 / np.sqrt(np.pi) * np.sqrt(np.where(small, x, 0.0))
-              * np.polyval(_SERIES[::-1], np.where(small, x, 0.0)))
+    small = x < _SMALL
+    xs = np.where(small, x, 0.0)
+    series = 0.5 * xs - 2.0 / np.sqrt(np.pi) * xs * np.sqrt(xs) * np.polyval(_SERIES2[::-1], xs)
+    xl = np.clip(np.where(small, 1.0, x), _SMALL, 1e12)  # Theta = 1/2 - 3/(8x) to rounding beyond 1e12
+    r = np.sqrt(xl)
     with np.errstate(under="ignore"):
-        closed = ((xs - 0.5) * erf(np.sqrt(xs)) + np.sqrt(xs / np.pi) * np.exp(-xs)) / xs
+        e = erf(r)
+        closed = (0.5 * xl * xl * (1.0 - e) + (0.5 * xl - 0.375) * e
+                  - (0.5 * xl * r - 0.75 * r) * np.exp(-xl) / np.sqrt(np.pi)) / xl
     return np.where(small, series, closed)
 
 
 def heating_rate(q, v, C, S, B, nu, conductivity, diffusivity):
     """dT/dq, the temperature rise of the contact spots per unit wavenumber (K m).
 
-    .. math:: \\frac{dT}{dq} = \\frac{2 v}{(1-\\nu^2)\\lambda}\\,q^2 C S B\\,\\Theta(\\pi D q / v)
+    .. math:: \\frac{dT}{dq} = \\frac{J}{\\lambda q}\\,\\Theta\\Big(\\frac{\\pi D q}{v}\\Big)
+              = \\frac{2 v}{(1-\\nu^2)\\lambda}\\,q^2 C S B\\,\\Theta(\\pi D q / v)
 
-    Independent of the nominal pressure: the heat per unit nominal area and the contact area
-    both grow in proportion to sigma0.
+    with J = 2 v q^3 C S B / (1 - nu^2) the power per unit contact area released in the layer of
+    depth 1/q. Limits: (v / ((1 - nu^2) lambda)) q^2 C S B at low speed (steady spreading) and
+    pi q^3 C S B / ((1 - nu^2) rho c) at high speed (adiabatic heating of the layer, independent
+    of v). Independent of the nominal pressure: the heat per unit nominal area and the contact
+    area both grow in proportion to sigma0.
 
     Parameters
     ----------

@@ -257,3 +257,73 @@ def friction_kernel(q, C, A, B, sigma0, nu, correction="none", gamma=0.5, extras
         S = area_factor(P, correction, gamma)
         return mu, area, G, friction_integrand(q, C, P, S, B, sigma0, nu) * np.asarray(q)
     return mu, area
+
+
+def contact_shear_gaussian(v_reduced, tau0, v0, c):
+    """Frictional shear stress of the real contact area, the Gaussian-in-log-velocity law (Pa).
+
+    .. math:: \\tau_f(v, T) = \\tau_{f0}\\,\\exp\\Big[-c\\,\\Big(\\log_{10}\\frac{v\\,a_T}{v_0}\\Big)^2\\Big]
+
+    Parameters
+    ----------
+    v_reduced : array
+        Sliding velocity reduced to the reference temperature, v a_T(T) (m/s), > 0 (a_T of the
+        modulus' temperature law, read at the contacts' temperature).
+    tau0 : float
+        Peak shear stress tau_f0 (Pa), >= 0.
+    v0 : float
+        Reduced velocity of the peak (m/s), > 0.
+    c : float
+        Width parameter (dimensionless, > 0): the stress falls to tau0/e at 1/sqrt(c) decades
+        from v0.
+
+    References
+    ----------
+    docs/theory.md, section "Contact shear term"; Lorenz et al., J. Chem. Phys. 142, 194701 (2015);
+    Fortunato et al., J. Phys.: Condens. Matter 27, 175008 (2015).
+    """
+    x = np.log10(np.asarray(v_reduced, dtype=float) / v0)
+    return tau0 * np.exp(-c * x * x)
+
+
+def contact_shear_table(v_reduced, v_table, tau_table):
+    """Frictional shear stress of the real contact area from a table (Pa): linear in log10 of the
+    reduced velocity between the table's points, held at the end values outside.
+
+    Parameters
+    ----------
+    v_reduced : array
+        v a_T(T) (m/s), > 0.
+    v_table : array (m,)
+        Increasing reduced velocities of the table (m/s), > 0.
+    tau_table : array (m,)
+        tau_f at those velocities (Pa), >= 0.
+
+    References
+    ----------
+    docs/theory.md, section "Contact shear term".
+    """
+    return np.interp(np.log10(np.asarray(v_reduced, dtype=float)), np.log10(np.asarray(v_table, dtype=float)),
+                     np.asarray(tau_table, dtype=float))
+
+
+def contact_friction(tau, area, sigma0):
+    """mu_cont = tau_f (A/A0) / sigma0, the friction of shearing the real contact area (dimensionless).
+
+    .. math:: \\mu_\\mathrm{cont} = \\frac{\\tau_f(v, T_c)\\,A(v)/A_0}{\\sigma_0}
+
+    Parameters
+    ----------
+    tau : array
+        Frictional shear stress of the contacts (Pa).
+    area : array
+        Relative contact area while sliding A/A0 (dimensionless), at the magnification q1.
+    sigma0 : array
+        Nominal pressure (Pa), > 0.
+
+    References
+    ----------
+    docs/theory.md, section "Contact shear term"; Persson & Volokitin, Eur. Phys. J. E 21, 69 (2006);
+    Lorenz et al., J. Chem. Phys. 142, 194701 (2015).
+    """
+    return np.asarray(tau, dtype=float) * np.asarray(area, dtype=float) / np.asarray(sigma0, dtype=float)

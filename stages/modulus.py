@@ -285,6 +285,8 @@ def compute_modulus(inp: StageInput) -> xr.Dataset:
         spec = shift_spec(spec, fitted)
         _check_wlf(spec)
         model, model_attrs = dma_model(fitted)
+        T_data = fitted.temperatures  # the sweeps' range, read by the friction stage's flash temperature
+        model_attrs = {**model_attrs, "sweep_temperature_range": f"{np.min(T_data):.6g} {np.max(T_data):.6g} K"}
         times, curve = (fitted.times[0], fitted.times[-1]), None
         extra = dma_variables(fitted, inp.wanted)
     else:

@@ -156,12 +156,14 @@ def _stage_at(sc, v):
     from roughcontact.stages import psd as ps
 
     values = sc.values
-    get = lambda key: (values[key.partition(".")[0]] if "." not in key  # noqa: E731
-                       else values[key.partition(".")[0]][key.partition(".")[2]])
+    def get(key):
+        section, _, name = key.partition(".")
+        return values[section][name] if name else values[section]
+
     psd = ps.compute_psd(StageInput(params={k: get(k) for k in ps.STAGE.keys}))
-    mod = md.compute_modulus(StageInput(params={
-        "modulus": values["modulus"],
-        "numerics.modulus_points_per_decade": values["numerics"]["modulus_points_per_decade"]}))
+    ppd = values["numerics"]["modulus_points_per_decade"]
+    mod = md.compute_modulus(StageInput(params={"modulus": values["modulus"],
+                                               "numerics.modulus_points_per_decade": ppd}))
     params = {k: get(k) for k in fr.STAGE.keys}
     params["friction.v"] = v
     out = fr.compute_friction(StageInput(params=params, upstream={"psd": psd, "modulus": mod}))
@@ -302,3 +304,84 @@ def test_frequencies_beyond_the_modulus_grid_are_announced(tmp_path):
         fric = _run(raw, tmp_path)["friction"]
     assert fric.attrs["modulus_extrapolated"].startswith("yes")
     assert np.all(np.isfinite(fric["friction_coefficient"].values))
+
+
+# ----------------------------------------------------------------------------------------
+# Contact shear term (friction.shear)
+# ----------------------------------------------------------------------------------------
+
+SHEAR = {"friction.shear": "gaussian", "friction.shear_tau0": "3 MPa", "friction.shear_v0": "1e-6 m/s",
+         "friction.shear_c": 0.1}
+SHEAR_OUT = ["friction_coefficient", "friction_coefficient_viscoelastic", "friction_coefficient_contact",
+             "contact_shear_stress", "sliding_contact_area_ratio"]
+V3 = ["1e-6 m/s", "1e-3 m/s", "1 m/s"]
+
+
+def _gaussian(v_reduced, tau0=3e6, v0=1e-6, c=0.1):
+    return tau0 * np.exp(-c * np.log10(v_reduced / v0) ** 2)
+
+
+def test_zero_shear_stress_gives_the_seed_friction_exactly(tmp_path):
+    seed = _run(_scene(**{"friction.v": V3}), tmp_path / "seed")["friction"]
+    zero = _run(_scene(**{**SHEAR, "friction.shear_tau0": "0 Pa", "friction.v": V3,
+                          "outputs.variables": SHEAR_OUT}), tmp_path / "zero")["friction"]
+    np.testing.assert_array_equal(zero["friction_coefficient"].values, seed["friction_coefficient"].values)
+    np.testing.assert_array_equal(zero["friction_coefficient_contact"].values, 0.0)
+
+
+def test_contact_term_is_tau_area_over_pressure_at_each_velocity(tmp_path):
+    """mu_cont = tau_f(v a_T) A/A0 / sigma0 at every v (a_T of the modulus at modulus.T, WLF about
+    T_ref), and mu is the sum of the two terms."""
+    res = _run(_scene(**SHEAR, **{"friction.v": V3, "load.p": ["0.2 MPa", "0.4 MPa"],
+                                  "outputs.variables": SHEAR_OUT}), tmp_path)
+    fric, aT = res["friction"], float(res["modulus"]["shift_factor"])
+    tau = _gaussian(fric["v"].values * aT)
+    np.testing.assert_allclose(fric["contact_shear_stress"].values, tau, rtol=1e-12)  # independent of p
+    expected = tau[:, None] * fric["sliding_contact_area_ratio"].transpose("v", "p") / fric["p"]
+    np.testing.assert_allclose(fric["friction_coefficient_contact"].transpose("v", "p"), expected, rtol=1e-12)
+    np.testing.assert_allclose(fric["friction_coefficient"],
+                               fric["friction_coefficient_viscoelastic"] + fric["friction_coefficient_contact"],
+                               rtol=1e-14)
+    assert np.all(fric["friction_coefficient_contact"] > 0)
+
+
+def test_shear_table_is_read_at_the_reduced_velocity(tmp_path):
+    """A table of tau_f: linear in log10(v a_T) between its points (here through the Gaussian's
+    values at three decades: exact at the nodes), the end values outside."""
+    res = _run(_scene(**{"friction.shear": "table", "friction.shear_table_v": ["1e-12 m/s", "1e-9 m/s", "1e-6 m/s"],
+                         "friction.shear_table_tau": ["1 MPa", "2 MPa", "4 MPa"], "friction.v": V3,
+                         "outputs.variables": SHEAR_OUT}), tmp_path)
+    fric, aT = res["friction"], float(res["modulus"]["shift_factor"])
+    expected = np.interp(np.log10(fric["v"].values * aT), [-12, -9, -6], [1e6, 2e6, 4e6])
+    np.testing.assert_allclose(fric["contact_shear_stress"].values, expected, rtol=1e-12)
+
+
+def test_with_flash_temperature_tau_follows_the_contacts_temperature(tmp_path):
+    """With friction.flash the shear stress is read at the flash temperature of the contacts (its
+    WLF a_T), not at modulus.T: the contacts are hotter at speed, so v a_T is smaller there."""
+    thermal = {"friction.flash": True, "friction.thermal_conductivity": "0.25 W/(m*K)",
+               "friction.density": "1200 kg/m^3", "friction.heat_capacity": "1500 J/(kg*K)"}
+    res = _run(_scene(**SHEAR, **thermal, **{"friction.v": ["1e-6 m/s", "10 m/s", "100 m/s"],
+                                             "outputs.variables": SHEAR_OUT + ["flash_temperature"]}), tmp_path)
+    fric = res["friction"]
+    Tc = fric["flash_temperature"].values
+    assert np.all(Tc[1:] > float(fric["T"]) + 1.0)  # the contacts are hotter: the test can tell
+    aT = 10.0 ** ve.wlf_log10_shift(Tc, 233.15, 17.44, 51.6)
+    np.testing.assert_allclose(fric["contact_shear_stress"].values, _gaussian(fric["v"].values * aT), rtol=1e-10)
+    at_given = _gaussian(fric["v"].values * float(res["modulus"]["shift_factor"]))
+    assert np.all(np.abs(fric["contact_shear_stress"].values[1:] / at_given[1:] - 1) > 1e-3)
+    np.testing.assert_allclose(fric["friction_coefficient_contact"],
+                               fric["contact_shear_stress"] * fric["sliding_contact_area_ratio"] / fric["p"],
+                               rtol=1e-12)
+
+
+@pytest.mark.parametrize("overrides, key", [
+    ({"friction.shear": "gaussian", "friction.shear_v0": "1 m/s", "friction.shear_c": 0.1}, "friction.shear_tau0"),
+    ({"friction.shear": "table", "friction.shear_table_v": ["1 m/s", "0.1 m/s"],
+      "friction.shear_table_tau": ["1 MPa", "2 MPa"]}, "friction.shear_table_v"),
+    ({"outputs.variables": ["friction_coefficient_contact"]}, "friction.shear"),
+])
+def test_bad_shear_input_names_the_key(tmp_path, overrides, key):
+    with pytest.raises(UserError) as err:
+        _run(_scene(**overrides), tmp_path)
+    assert err.value.key == key

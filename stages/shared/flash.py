@@ -9,12 +9,14 @@ and calls :func:`compute_flash` when ``friction.flash = true``.
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import xarray as xr
 
 from roughcontact.physics.flash import background_march, flash_friction_kernel
 from roughcontact.physics.viscoelastic import shift_factors
-from roughcontact.stage import Param, UserError, Var
+from roughcontact.stage import Param, SceneWarning, UserError, Var
 
 #: keys of [friction] for the flash temperature (declared in the friction section)
 FLASH_PARAMS = (
@@ -36,9 +38,10 @@ FLASH_PARAMS = (
 #: numerics of the flash temperature (registered in [numerics] by the friction stage)
 FLASH_NUMERICS = (
     Param("flash_shift_step", "quantity", "", default=0.05, lo=0.0, lo_open=True,
-          presets={"fast": 0.1, "accurate": 0.02}, ladder=(0.4, 0.2, 0.1, 0.05, 0.05, 0.03, 0.02, 0.01, 0.005),
-          doc="largest change of log10 a_T per q step of the flash-temperature march (finer sub-steps where it "
-              "heats fast)"),
+          presets={"fast": 0.1, "accurate": 0.02},
+          ladder=(0.4, 0.2, 0.1, 0.05, 0.05, 0.03, 0.02, 0.01, 0.005),
+          doc="largest change of log10 a_T per q step of the flash-temperature march "
+              "(finer sub-steps where it heats fast)"),
     Param("flash_time_nodes", "int", default=16, lo=3, presets={"fast": 10, "accurate": 24},
           doc="time nodes of the background-heating march (geometric over 6 decades of the sliding time)"),
 )
@@ -133,9 +136,66 @@ def _kernel(q, C, v, T_s, grid, Ep, Epp, p, nu, *, law, thermal, n_phi, correcti
     return (out[0], out[1], out[2], np.broadcast_to(rise, np.shape(out[0]))) + tuple(out[3:])
 
 
+def data_temperature_range(mod: xr.Dataset) -> tuple[float, float, str] | None:
+    """(T_min, T_max, what) of the measurements behind the modulus' temperature law, in K: the DMA
+    sweeps' temperatures (the WLF law or shifts fitted to them), or a given shift table's; None
+    when the law is not tied to data (WLF with given constants, no shift)."""
+    if mod.attrs.get("model") == "dma" and "sweep_temperature_range" in mod.attrs:
+        lo, hi, _ = str(mod.attrs["sweep_temperature_range"]).split()
+        return float(lo), float(hi), "DMA sweeps"
+    if mod.attrs.get("model") == "dma":
+        temps = mod["shift_T"].values if "shift_T" in mod.coords else (
+            mod["dma_temperature"].values if "dma_temperature" in mod else None)
+        what = "DMA sweeps"
+    elif mod.attrs.get("horizontal_shift") == "table" and "shift_T" in mod.coords:
+        temps, what = mod["shift_T"].values, "shift table"
+    else:
+        return None
+    if temps is None or np.size(temps) == 0:
+        return None
+    return float(np.min(temps)), float(np.max(temps)), what
+
+
+def _celsius(T: float) -> str:
+    return f"{T - 273.15:.0f} degC"
+
+
+def warn_outside_data(T_contact: xr.DataArray, v: xr.DataArray, mod: xr.Dataset, tolerance: float = 1.0) -> None:
+    """A SceneWarning when the contacts' temperature leaves the temperature range of the data the
+    modulus' temperature law was fitted to by more than ``tolerance`` K: the modulus there is
+    extrapolated (WLF beyond the sweeps; a table's a_T held constant)."""
+    data = data_temperature_range(mod)
+    if data is None:
+        return
+    lo, hi, what = data
+    T = np.asarray(T_contact.values, dtype=float)
+    over, under = float(np.nanmax(T)) - hi, lo - float(np.nanmin(T))
+    if max(over, under) <= tolerance:
+        return
+    outside = (T_contact > hi + tolerance) | (T_contact < lo - tolerance)
+    other = [d for d in outside.dims if d != "v"]
+    if "v" in outside.dims:
+        hit = outside.any(other) if other else outside
+        speed = f"from v = {float(v.where(hit, drop=True).min()):.3g} m/s on" if bool(hit.any()) else ""
+    else:
+        speed = f"at v = {float(v):.3g} m/s"
+    if over >= under:
+        extreme, side, end = float(np.nanmax(T)), f"{over:.0f} K above", "warmest"
+    else:
+        extreme, side, end = float(np.nanmin(T)), f"{under:.0f} K below", "coldest"
+    if what == "DMA sweeps":
+        law, fix = "the WLF law fitted to the sweeps, extrapolated beyond the data", "add sweeps at those temperatures"
+    else:
+        law, fix = "a_T held at the table's end value", "extend modulus.shift_T"
+    warnings.warn(SceneWarning(
+        f"friction.flash: the contacts leave the temperature range of the {what} ({_celsius(lo)} to "
+        f"{_celsius(hi)}) {speed} and reach {_celsius(extreme)}, {side} the {end} one; there the modulus is "
+        f"{law}: treat mu at those speeds as an extrapolation, or {fix}"), stacklevel=2)
+
+
 def compute_flash(inp, q, C, v, p, mod, nu, thermal, n_phi, n_seg, correction, gamma, area=("persson", None)):
-    """The friction with the flash temperature over the sweep: a dict of DataArrays (mu, A/A0,
-    the flash temperature, the background rise and, if asked, the profiles over q)."""
+    """The friction with the flash temperature over the sweep: a dict of DataArrays (mu, A/A0 and
+    the flash temperature always; the background rise and the profiles over q if asked)."""
     profile = bool({"flash_temperature_profile", "frictional_heating"} & inp.wanted)
     background = inp["friction.background"]
     kwargs = dict(law=temperature_law(mod), thermal=thermal, n_phi=n_phi, correction=correction, gamma=gamma,
@@ -150,9 +210,10 @@ def compute_flash(inp, q, C, v, p, mod, nu, thermal, n_phi, n_seg, correction, g
     )
     names = ["friction_coefficient", "sliding_contact_area_ratio", "flash_temperature", "background_temperature_rise",
              "flash_temperature_profile", "frictional_heating"]
-    result = dict(zip(names, outputs, strict=False))  # the two profiles only when asked for
-    return {name: value for name, value in result.items()
-            if name in ("friction_coefficient", "sliding_contact_area_ratio") or name in inp.wanted}
+    result = dict(zip(names, outputs, strict=False))
+    warn_outside_data(result["flash_temperature"], v, mod)
+    always = ("friction_coefficient", "sliding_contact_area_ratio", "flash_temperature")
+    return {name: value for name, value in result.items() if name in always or name in inp.wanted}
 
 
 def flash_attrs(inp, thermal) -> dict:
@@ -161,8 +222,10 @@ def flash_attrs(inp, thermal) -> dict:
     background = inp["friction.background"]
     return {
         "flash_temperature_model": (
-            "Persson (2006) flash temperature: dT/dq = 2 v q^2 C S B(q; T_q) Theta(pi D q / v) / ((1 - nu^2) lambda), "
-            "T_q marched in q (trapezoid steps solved by the root finder), E read at (q v cos phi, T_q); "
+            "Persson (2006) flash temperature, heat released in the deformed layer (depth 1/q): "
+            "dT/dq = 2 v q^2 C S B(q; T_q) Theta(pi D q / v) / ((1 - nu^2) lambda), Theta from x/2 (adiabatic layer) "
+            "to 1/2 (steady spreading); T_q marched in q (trapezoid steps solved by the root finder), "
+            "E read at (q v cos phi, T_q); "
             "docs/theory.md, section 'Flash temperature'"),
         "thermal_properties": f"lambda = {lam:.6g} W/(m K), D = {D:.6g} m^2/s, effusivity = {e:.6g} W s^0.5/(m^2 K)",
         "background_heating": ("none" if background == "none" else
