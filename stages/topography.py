@@ -26,7 +26,7 @@ from roughcontact.stage import Figure, Param, Shape, Stage, StageInput, UserErro
 
 from .figures.topography import figure_coherence, figure_measured_psd
 from .shared.maps import topography_files
-from .shared.measured import container_files, merged_psd, mode_factor, prepared_files
+from .shared.measured import container_files, measurements_entered, merged_psd, mode_factor, prepared_files
 from .shared.surfaces import CONTAINER_KEYS, MAP_KEYS, SURFACES, is_measured, surface_reads
 
 register_params(
@@ -49,11 +49,14 @@ def _spectra(p, edges, spec, other=None):
 
 def _describe(p, spec):
     """What the result records about one file (JSON-able)."""
-    d = {k: p[k] for k in ("path", "format", "unit", "size_source", "periodic", "detrend", "window", "analysis", "cutoff")}
+    d = {k: p[k] for k in ("path", "format", "unit", "size_source", "periodic", "detrend", "window", "analysis",
+                           "cutoff")}
     d.update(shape=list(p["h"].shape), sizes_m=list(p["sizes"]), q_range_per_m=[p["q_min"], p["q_max"]],
              rms_height_after_detrend_m=p["rms"])
     if "member" in p:  # a measurement of a contact.engineering container
         d["container_measurement"] = p["member"]
+    if p.get("filled"):  # undefined heights filled (fill_undefined): how many, where
+        d["undefined_filled"] = p["filled"]
     if p["analysis"] == "profiles":
         d["isotropic_conversion"] = (f"C(q) = c(H) C1D(q) / q with c(H) = Gamma(1+H)/(2 pi^1.5 Gamma(H+1/2)), "
                                      f"H = {spec['hurst']:g}; exact only for an isotropic self-affine surface with "
@@ -64,8 +67,9 @@ def _describe(p, spec):
 def _pairing_problem(a, b) -> str | None:
     """Why file i of the substrate cannot be paired with file i of the solid, or None."""
     if len(a) != len(b):
-        return f"the substrate has {len(a)} file(s) and the solid {len(b)}; pairs need one solid file per substrate file"
-    for i, (p, r) in enumerate(zip(a, b)):
+        return (f"the substrate has {len(a)} file(s) and the solid {len(b)}; pairs need one solid file per substrate "
+                "file")
+    for i, (p, r) in enumerate(zip(a, b, strict=False)):
         if p["h"].shape != r["h"].shape:
             return f"file pair {i}: grids differ ({p['h'].shape} vs {r['h'].shape} points)"
         if not np.allclose(p["sizes"], r["sizes"], rtol=1e-6):
@@ -79,7 +83,7 @@ def _paired_spectra(prepared, specs, edges):
     """Joint spectra of the file pairs: a pair uses the modes reliable in both files; each
     surface keeps its own line-scan H."""
     joint = []
-    for p, r in zip(prepared["substrate"], prepared["solid"]):
+    for p, r in zip(prepared["substrate"], prepared["solid"], strict=False):
         both = dict(p, q_max=min(p["q_max"], r["q_max"]))
         s = _spectra(both, edges, specs["substrate"], r)
         if p["analysis"] == "profiles":
@@ -88,14 +92,18 @@ def _paired_spectra(prepared, specs, edges):
     return {"substrate": joint, "solid": [{"n": s["n"], "q": s["q"], "C11": s["C22"]} for s in joint]}
 
 
-def _surface_vars(name, spectra, described, bpd):
-    """The merged PSD of one surface with its error, mean wavenumbers and modes per bin."""
+def _surface_vars(name, spectra, described, bpd, entered):
+    """The merged PSD of one surface with its error, mean wavenumbers and modes per bin
+    (``entered``: :func:`measurements_entered`)."""
     q, C, n, err, ratio = merged_psd(spectra)
-    common = {"surface": name, "files": json.dumps(described),
+    filled = [f"{d['path']}: {d['undefined_filled']['points']} points" for d in described if "undefined_filled" in d]
+    common = {"surface": name, "files": json.dumps(described), **entered,
+              **({"undefined_filled": "; ".join(filled)} if filled else {}),
               "convention": "Persson, C(q) = (2 pi)^-2 int d^2x <hh> e^-iqx",
               "radial_average": f"mean over Fourier modes with |q| in log bins, {bpd} per decade",
-              "merge": "in each bin, the files (measurements) with modes there averaged with weights n, their effective "
-                       "independent modes (inverse-variance weights); each file's range in 'files' (q_range_per_m)"}
+              "merge": "in each bin, the files (measurements) with modes there averaged with weights n, their "
+                       "effective independent modes (inverse-variance weights); each file's range in 'files' "
+                       "(q_range_per_m)"}
     estimate = ("C / sqrt(n), n the independent modes (Gaussian random-phase statistics; a window's correlation "
                 "of neighbouring modes counted), times the Birge ratio where the files disagree beyond it (chi-square "
                 "test at 1 %); correlated profiles make it an underestimate")
@@ -128,7 +136,8 @@ def describe_topography(inp: StageInput) -> Shape:
     for name in specs:
         other = prepared["solid" if name == "substrate" else "substrate"] if paired else [None] * len(prepared[name])
         lattice = [binned_wavenumbers(p["h"].shape, p["sizes"], edges, min(p["q_max"], r["q_max"]) if r else p["q_max"],
-                                      profiles=p["analysis"] == "profiles") for p, r in zip(prepared[name], other)]
+                                      profiles=p["analysis"] == "profiles")
+                   for p, r in zip(prepared[name], other, strict=True)]
         q, _, n, _ = merge_spectra([{"n": n, "q": q, "C11": np.zeros_like(q)} for n, q in lattice])
         bins |= n > 0
         if np.count_nonzero(n > 0) < 2:
@@ -157,7 +166,7 @@ def compute_topography(inp: StageInput) -> xr.Dataset:
     data_vars, keep = {}, np.zeros(centres.size, bool)
     for name in specs:
         described = [_describe(p, specs[name]) for p in prepared[name]]
-        found, has = _surface_vars(name, spectra[name], described, bpd)
+        found, has = _surface_vars(name, spectra[name], described, bpd, measurements_entered(prepared[name]))
         data_vars.update(found)
         keep |= has
     if paired:
@@ -175,7 +184,7 @@ def compute_topography(inp: StageInput) -> xr.Dataset:
 register(
     Stage(
         name="topography",
-        version="2",
+        version="3",
         compute=compute_topography,
         # of a measured surface the map keys and the line-scan H; of any other surface only its kind
         reads=(*surface_reads({"topography": (*MAP_KEYS, "hurst"), "container": (*CONTAINER_KEYS, "hurst"), "*": ()}),
@@ -187,7 +196,8 @@ register(
             **{f"psd_{s}_measured": Var("m^4", f"measured PSD of the {s} (Persson convention)") for s in SURFACES},
             **{f"psd_{s}_measured_error": Var("m^4", f"statistical standard error of the measured PSD of the {s}")
                for s in SURFACES},
-            **{f"q_{s}_measured": Var("1/m", f"mean wavenumber of the {s}'s Fourier modes in the bin") for s in SURFACES},
+            **{f"q_{s}_measured": Var("1/m", f"mean wavenumber of the {s}'s Fourier modes in the bin")
+               for s in SURFACES},
             **{f"modes_{s}": Var("1", f"independent Fourier modes of the {s} in the bin (a window's correlations "
                                       "counted)") for s in SURFACES},
             **{f"psd_{s}_measured_spread": Var("1", f"Birge ratio sqrt(chi^2/(k-1)) of the spread between the {s}'s "

@@ -82,7 +82,8 @@ def _check_surface(values: dict, key: str) -> None:
 SELF_AFFINE_PARAMS = (
     Param("H", "quantity", "", lo=0.0, hi=1.0, lo_open=True, doc="Hurst exponent, 0 < H <= 1"),
     Param("qL", "quantity", "1/m", lo=0.0, lo_open=True, doc="lowest wavenumber 2 pi / L"),
-    Param("q0", "quantity", "1/m", default=None, lo=0.0, lo_open=True, doc="roll-off wavenumber (default qL: no roll-off)"),
+    Param("q0", "quantity", "1/m", default=None, lo=0.0, lo_open=True,
+          doc="roll-off wavenumber (default qL: no roll-off)"),
     Param("q1", "quantity", "1/m", lo=0.0, lo_open=True, doc="upper cut-off wavenumber"),
     Param("hrms", "sweep", "m", default=None, lo=0.0, lo_open=True, dim="hrms_{section}",
           doc="rms roughness; a list is a sweep (dimension hrms_substrate / hrms_solid)"),
@@ -108,14 +109,21 @@ DETREND_DEGREE = {"mean": 0, "plane": 1, "curvature": 2}
 TOPOGRAPHY_PARAMS = (
     Param("files", "paths", doc="height map(s) or line scan(s) of this surface, any format SurfaceTopography reads; "
           "several files (e.g. several magnifications) are merged onto one q grid"),
-    Param("height_unit", "str", default=None, doc="unit of heights (and sizes) for files that do not say (npy; text without a header "
-          "like '# x [um]  h [nm]', whose units are used)"),
-    Param("size_x", "quantity", "m", default=None, lo=0.0, lo_open=True, doc="scan length along x, for files that do not say"),
+    Param("height_unit", "str", default=None,
+          doc="unit of heights (and sizes) for files that do not say (npy; text without a header like "
+              "'# x [um]  h [nm]', whose units are used)"),
+    Param("size_x", "quantity", "m", default=None, lo=0.0, lo_open=True,
+          doc="scan length along x, for files that do not say"),
     Param("size_y", "quantity", "m", default=None, lo=0.0, lo_open=True,
           doc="scan length along y, for files that do not say (default: square pixels)"),
-    Param("periodic", "bool", default=None, doc="treat the data as periodic (default: as the file says; measurements are not)"),
+    Param("periodic", "bool", default=None,
+          doc="treat the data as periodic (default: as the file says; measurements are not)"),
+    Param("fill_undefined", "choice", default="none", choices=("none", "harmonic"),
+          doc="undefined heights (optical profilometers' non-measured points): 'none' refuses the file, 'harmonic' "
+              "fills them with SurfaceTopography's harmonic interpolation (how many and where: attribute 'files')"),
     Param("analysis", "choice", default="area", choices=("area", "profiles"),
-          doc="maps: 2D radial PSD ('area') or average of the line scans along x ('profiles'); line scans: always profiles"),
+          doc="maps: 2D radial PSD ('area') or average of the line scans along x ('profiles'); line scans: always "
+              "profiles"),
     Param("detrend", "choice", default=None, choices=tuple(DETREND_DEGREE),
           doc="polynomial removed before the FFT (default: mean if periodic, else plane)"),
     Param("window", "choice", default=None, choices=("hann", "none"),
@@ -132,20 +140,22 @@ TOPOGRAPHY_PARAMS = (
 )
 
 CONTAINER_PARAMS = (
-    Param("container", "path", doc="contact.engineering container (ZIP with the measurements and index.json / meta.yml); "
-          "units, sizes, height scale, detrending and reliability cutoffs come from its metadata"),
+    Param("container", "path",
+          doc="contact.engineering container (ZIP with the measurements and index.json / meta.yml); units, sizes, "
+              "height scale, detrending and reliability cutoffs come from its metadata"),
     Param("surface", "str", default=None, doc="which surface of the container (by name) when it holds several"),
     Param("detrend", "choice", default=None, choices=tuple(DETREND_DEGREE),
-          doc="polynomial removed before the FFT (default: the measurement's detrend_mode, else mean if periodic, else plane)"),
-    *(p for p in TOPOGRAPHY_PARAMS if p.name in ("analysis", "window", "hurst", "extend")),
+          doc="polynomial removed before the FFT (default: the measurement's detrend_mode, else mean if periodic, "
+              "else plane)"),
+    *(p for p in TOPOGRAPHY_PARAMS if p.name in ("fill_undefined", "analysis", "window", "hurst", "extend")),
 )
 
 #: the keys of a measured surface (kind "topography") that reading and preparing its maps takes
 #: (units, sizes, detrending, window, analysis, reliability cutoffs); ``extend`` and ``hurst`` are not among them
-MAP_KEYS = ("files", "height_unit", "size_x", "size_y", "periodic", "analysis", "detrend", "window", "tip_radius",
-            "resolution", "q_reliable")
+MAP_KEYS = ("files", "height_unit", "size_x", "size_y", "periodic", "fill_undefined", "analysis", "detrend", "window",
+            "tip_radius", "resolution", "q_reliable")
 #: the same for a contact.engineering container (kind "container"), whose metadata gives the rest
-CONTAINER_KEYS = ("container", "surface", "detrend", "analysis", "window")
+CONTAINER_KEYS = ("container", "surface", "fill_undefined", "detrend", "analysis", "window")
 
 
 def surface_reads(by_kind: dict) -> tuple[ByKind, ...]:
