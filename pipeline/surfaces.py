@@ -8,12 +8,13 @@ text matrices, npy, NetCDF, ...). The measurements of a contact.engineering cont
 from __future__ import annotations
 
 import re
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from .errors import UserError
+from .errors import SceneWarning, UserError
 from .header_units import length_units
 
 
@@ -68,6 +69,9 @@ class Topography:
 #: the ways of filling undefined heights (``fill_undefined`` of a measured surface): "none" keeps them
 #: (the stages refuse them), "harmonic" is SurfaceTopography's ``interpolate_undefined_data("harmonic")``
 FILL_METHODS = ("none", "harmonic")
+#: above this fraction of filled heights the reader warns (the PSD at short wavelengths comes out lower by about
+#: the fraction, beyond its statistical error: docs/topography.md, "Missing data")
+FILL_WARN_FRACTION = 0.01
 FILL_DESCRIPTION = {
     "harmonic": "SurfaceTopography interpolate_undefined_data('harmonic'): the undefined heights solve the discrete "
                 "Laplace equation (each the mean of its 2 or 4 nearest neighbours), the defined heights around them as "
@@ -102,6 +106,23 @@ def fill_undefined(heights: np.ndarray, sizes, periodic: bool, method: str | Non
         raise ValueError("the interpolation left undefined points (a region of undefined points with no defined "
                          "neighbour)")
     return filled, bad
+
+
+def _filled(heights, sizes, periodic, fill, path, key):
+    """:func:`fill_undefined` for the reader: errors name the file and ``key.fill_undefined``;
+    a warning when more than :data:`FILL_WARN_FRACTION` of the heights were filled."""
+    try:
+        heights, filled = fill_undefined(heights, sizes, periodic, fill)
+    except ValueError as exc:
+        raise UserError(f"cannot fill the undefined heights ({exc})", file=str(path),
+                        key=f"{key}.fill_undefined") from None
+    if filled is not None and filled.mean() > FILL_WARN_FRACTION:
+        warnings.warn(SceneWarning(
+            f"{path}:{key}.fill_undefined: {filled.mean():.1%} of the heights were undefined and are filled; the fill "
+            "has no roughness of its own, so at wavelengths shorter than the holes the PSD comes out lower by about "
+            "that fraction, more than its statistical error (docs/topography.md); crop the map to a better measured "
+            "part if that matters"), stacklevel=3)
+    return heights, filled
 
 
 def _npy_complete(path: Path) -> None:
@@ -209,11 +230,7 @@ def read_topography(path: Path, *, key: str = "surface", height_unit: str | None
     unit, source, factor, size_factor = length_units(path, unit, height_unit, key)
     heights *= factor
     sizes_out = tuple(s * size_factor for s in sizes_out) if sizes_out is not None else None
-    try:
-        heights, filled = fill_undefined(heights, sizes_out, periodic, fill)
-    except ValueError as exc:
-        raise UserError(f"cannot fill the undefined heights ({exc})", file=str(path),
-                        key=f"{key}.fill_undefined") from None
+    heights, filled = _filled(heights, sizes_out, periodic, fill, path, key)
     return Topography(
         path=path, heights=heights, physical_sizes=sizes_out, periodic=periodic, unit=unit,
         format=type(reader).__name__.removesuffix("Reader"), channel=str(getattr(channel, "name", channel.index)),
