@@ -22,8 +22,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import UserError
-from .surfaces import Topography
+from .errors import SceneWarning, UserError
+from .surfaces import FILL_DESCRIPTION, Topography
 from .units import array_to_si
 
 
@@ -42,11 +42,15 @@ class Container:
         the container's metadata pipeline applied); its ``metadata`` holds ``measurement``
         (name), ``datafile``, ``detrend_mode``, ``reliability_cutoff_m`` (None if the metadata
         gives no instrument parameters) and ``reliability_cutoff_source``.
+    left_out
+        The measurements not read, each a dict with ``measurement``, ``datafile`` and ``reason``
+        (non-uniformly sampled line scans: the spectra here need uniform grids).
     """
 
     path: Path
     surface: str
     measurements: list = field(default_factory=list)
+    left_out: list = field(default_factory=list)
 
 
 def _fail(path: Path, key: str, message: str) -> UserError:
@@ -97,8 +101,16 @@ def _cutoff(topo, factor: float):
                                     "(SurfaceTopography short_reliability_cutoff)")
 
 
-def _measurement(container, index: int, name: str, datafile: str, members: set, path: Path, key: str):
-    """One measurement read and checked, as a :class:`roughcontact.surfaces.Topography` in metres."""
+class _NonUniform(Exception):
+    """A measurement that is a non-uniformly sampled line scan (left out, not an error)."""
+
+
+def _measurement(container, index: int, name: str, datafile: str, members: set, path: Path, key: str,
+                 fill: str | None = None):
+    """One measurement read and checked, as a :class:`roughcontact.surfaces.Topography` in metres.
+    A non-uniformly sampled line scan raises :class:`_NonUniform` (the caller leaves it out);
+    undefined heights are filled by SurfaceTopography's ``interpolate_undefined_data(fill)``
+    when ``fill`` is "harmonic" (and the container's own metadata did not fill them)."""
     from SurfaceTopography.Exceptions import CannotDetectFileFormat, UnknownFileFormat
 
     where = f"measurement {name!r} (data file {datafile!r})"
@@ -124,7 +136,17 @@ def _measurement(container, index: int, name: str, datafile: str, members: set, 
         raise _fail(path, key, f"{where}: no height unit: neither the metadata ('unit') nor the data file gives it; "
                                "add e.g. 'unit: um' to the measurement's metadata")
     if not getattr(topo, "is_uniform", True):
-        raise _fail(path, key, f"{where}: non-uniformly sampled line scans are not supported; resample them")
+        raise _NonUniform(f"a non-uniformly sampled line scan ({len(topo.positions())} points at uneven spacing); "
+                          "the spectra here are computed on uniform grids")
+    filled, method = None, None
+    if fill not in (None, "none") and np.ma.is_masked(heights):
+        filled = np.ma.getmaskarray(heights)
+        try:
+            heights = topo.interpolate_undefined_data(fill).heights()
+        except Exception as exc:  # noqa: BLE001 - a hole with no defined neighbour, ...
+            raise UserError(f"{where}: cannot fill the undefined heights ({exc.__class__.__name__}: {str(exc)[:120]})",
+                            file=str(path), key=f"{key}.fill_undefined") from None
+        method = f"{fill}: {FILL_DESCRIPTION[fill]}"
     factor = float(array_to_si(np.array(1.0), str(unit), "m", key=f"{key}.container ({where}, unit)"))
     heights = np.ma.filled(np.ma.asarray(heights, dtype=float), np.nan) * factor
     try:
@@ -140,7 +162,8 @@ def _measurement(container, index: int, name: str, datafile: str, members: set, 
     sizes = tuple(float(s) * factor for s in np.atleast_1d(topo.physical_sizes))
     return Topography(path=Path(f"{path}[{name}]"), heights=heights, physical_sizes=sizes,
                       periodic=bool(topo.is_periodic), unit=str(unit), format="contact.engineering container",
-                      channel=str(info.get("data_source", 0)), metadata=meta, unit_source="container")
+                      channel=str(info.get("data_source", 0)), metadata=meta, unit_source="container",
+                      filled=filled, fill_method=method)
 
 
 def _plain(value):
@@ -152,12 +175,17 @@ def _plain(value):
     return value if isinstance(value, (str, int, float, bool)) or value is None else str(value)
 
 
-def read_container(path: Path, *, key: str = "surface", surface: str | None = None) -> Container:
+def read_container(path: Path, *, key: str = "surface", surface: str | None = None,
+                   fill: str | None = None) -> Container:
     """Read the measurements of one surface of a contact.engineering container.
 
     ``key`` is the scene section (errors name ``key.container``); ``surface`` picks a surface
-    by name when the container holds several. A container needs at least two measurements:
-    it exists to merge several scales (one measurement is a plain ``kind = "topography"``).
+    by name when the container holds several; ``fill`` ("harmonic", the scene's
+    ``key.fill_undefined``) fills undefined heights. A container needs at least two
+    measurements: it exists to merge several scales (one measurement is a plain
+    ``kind = "topography"``). Non-uniformly sampled line scans are left out with a
+    :class:`~roughcontact.errors.SceneWarning` naming them (``Container.left_out``); a
+    container with nothing else is an error.
     """
     path = Path(path)
     reader, index, name = _open(path, key, surface)
@@ -174,7 +202,17 @@ def read_container(path: Path, *, key: str = "surface", surface: str | None = No
                                "that file as kind = 'topography'")
     out = Container(path=path, surface=name)
     for i, (label, datafile) in enumerate(zip(labels, datafiles, strict=False)):
-        out.measurements.append(_measurement(container, i, label, datafile, in_archive, path, key))
+        try:
+            out.measurements.append(_measurement(container, i, label, datafile, in_archive, path, key, fill))
+        except _NonUniform as why:
+            out.left_out.append({"measurement": label, "datafile": datafile, "reason": str(why)})
+    if out.left_out:
+        names = "; ".join(f"measurement {m['measurement']!r} (data file {m['datafile']!r}): {m['reason']}"
+                          for m in out.left_out)
+        if not out.measurements:
+            raise _fail(path, key, f"no measurement can be used: {names}; resample them on uniform grids")
+        warnings.warn(SceneWarning(f"{path}:{key}.container: left out {names}; the PSD is merged from the other "
+                                   f"{len(out.measurements)} measurement(s) (recorded in the result)"), stacklevel=2)
     return out
 
 

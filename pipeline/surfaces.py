@@ -8,12 +8,13 @@ text matrices, npy, NetCDF, ...). The measurements of a contact.engineering cont
 from __future__ import annotations
 
 import re
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from .errors import UserError
+from .errors import SceneWarning, UserError
 from .header_units import length_units
 
 
@@ -41,6 +42,11 @@ class Topography:
         The file's metadata (instrument, date, ...), as JSON-able values.
     unit_source
         Where ``unit`` comes from: ``"file"``, ``"header"`` (a text file's column header) or ``"scene"``.
+    filled
+        The points that were undefined in the file and filled by :func:`fill_undefined` (a
+        boolean array of the shape of ``heights``), or None when none was filled.
+    fill_method
+        How they were filled, in words (None when none was).
     """
 
     path: Path
@@ -52,10 +58,71 @@ class Topography:
     channel: str
     metadata: dict = field(default_factory=dict)
     unit_source: str = "file"
+    filled: np.ndarray | None = None
+    fill_method: str | None = None
 
     @property
     def dim(self) -> int:
         return self.heights.ndim
+
+
+#: the ways of filling undefined heights (``fill_undefined`` of a measured surface): "none" keeps them
+#: (the stages refuse them), "harmonic" is SurfaceTopography's ``interpolate_undefined_data("harmonic")``
+FILL_METHODS = ("none", "harmonic")
+#: above this fraction of filled heights the reader warns (the PSD at short wavelengths comes out lower by about
+#: the fraction, beyond its statistical error: docs/topography.md, "Missing data")
+FILL_WARN_FRACTION = 0.01
+FILL_DESCRIPTION = {
+    "harmonic": "SurfaceTopography interpolate_undefined_data('harmonic'): the undefined heights solve the discrete "
+                "Laplace equation (each the mean of its 2 or 4 nearest neighbours), the defined heights around them as "
+                "boundary values; one sparse direct solve",
+}
+
+
+def fill_undefined(heights: np.ndarray, sizes, periodic: bool, method: str | None):
+    """Heights with their undefined (NaN) points filled by SurfaceTopography, and the mask of
+    the points filled (None if none was, or ``method`` is None / "none").
+
+    ``method`` "harmonic": :meth:`SurfaceTopography.UniformTopographyInterface.interpolate_undefined_data`,
+    which solves the discrete Laplace equation for the undefined points with the defined ones as
+    boundary values (so each filled height is the mean of its nearest neighbours: smooth, with no
+    roughness of its own). A hole with no defined neighbour cannot be filled (ValueError).
+    """
+    bad = np.isnan(heights)
+    if method in (None, "none") or not bad.any():
+        return heights, None
+    if method not in FILL_METHODS:
+        raise ValueError(f"unknown fill method {method!r}; one of {', '.join(FILL_METHODS)}")
+    if bad.all():
+        raise ValueError("every height is undefined: nothing to interpolate from")
+    from SurfaceTopography import Topography as STTopography, UniformLineScan
+
+    masked = np.ma.masked_array(np.where(bad, 0.0, heights), mask=bad)
+    sizes = tuple(sizes) if sizes is not None else tuple(float(n) for n in heights.shape)
+    cls = UniformLineScan if heights.ndim == 1 else STTopography
+    topo = cls(masked, sizes[0] if heights.ndim == 1 else sizes, periodic=periodic)
+    filled = np.ma.filled(np.ma.asarray(topo.interpolate_undefined_data(method).heights(), dtype=float), np.nan)
+    if np.isnan(filled).any() or not np.all(np.isfinite(filled)):
+        raise ValueError("the interpolation left undefined points (a region of undefined points with no defined "
+                         "neighbour)")
+    return filled, bad
+
+
+def _filled(heights, sizes, periodic, fill, path, key):
+    """:func:`fill_undefined` for the reader: errors name the file and ``key.fill_undefined``;
+    a warning when more than :data:`FILL_WARN_FRACTION` of the heights were filled."""
+    try:
+        heights, filled = fill_undefined(heights, sizes, periodic, fill)
+    except ValueError as exc:
+        raise UserError(f"cannot fill the undefined heights ({exc})", file=str(path),
+                        key=f"{key}.fill_undefined") from None
+    if filled is not None and filled.mean() > FILL_WARN_FRACTION:
+        warnings.warn(SceneWarning(
+            f"{path}:{key}.fill_undefined: {filled.mean():.1%} of the heights were undefined and are filled; the fill "
+            "has no roughness of its own, so at wavelengths shorter than the holes the PSD comes out lower by about "
+            "that fraction, more than its statistical error (docs/topography.md); crop the map to a better measured "
+            "part if that matters"), stacklevel=3)
+    return heights, filled
 
 
 def _npy_complete(path: Path) -> None:
@@ -95,13 +162,16 @@ def _explain_by_suffix(path: Path) -> None:
                             file=str(path)) from None
 
 
-def read_topography(path: Path, *, key: str = "surface", height_unit: str | None = None) -> Topography:
+def read_topography(path: Path, *, key: str = "surface", height_unit: str | None = None,
+                    fill: str | None = None) -> Topography:
     """Read a height map or line scan with SurfaceTopography (default channel).
 
     Heights and sizes are converted to metres with the file's unit, or, for a file that does
     not say its unit (npy, bare text), with ``height_unit`` from the scene section ``key``
-    (errors name ``key.height_unit``). Errors (unknown format, corrupt or truncated file,
-    non-uniform data, no unit) are :class:`UserError` naming the file.
+    (errors name ``key.height_unit``). Undefined heights (masked by the reader, or NaN) are
+    NaN, or, with ``fill`` = "harmonic" (the scene's ``key.fill_undefined``), filled by
+    :func:`fill_undefined` (``filled`` records where). Errors (unknown format, corrupt or
+    truncated file, non-uniform data, no unit) are :class:`UserError` naming the file.
     """
     path = Path(path)
     try:
@@ -130,7 +200,8 @@ def read_topography(path: Path, *, key: str = "surface", height_unit: str | None
             kwargs["unit"] = "m"  # placeholder; heights are kept as raw numbers (unit None below)
         topo = reader.topography(channel_index=channel.index, **kwargs)
         if not getattr(topo, "is_uniform", True):
-            raise UserError("non-uniformly sampled line scans are not supported; resample them on a uniform grid",
+            raise UserError(f"a non-uniformly sampled line scan ({len(topo.positions())} points at uneven spacing): "
+                            "the spectra here are computed on uniform grids; resample it on a uniform grid",
                             file=str(path))
         heights = topo.heights()
         info = _jsonable(dict(getattr(topo, "info", {}) or {}))
@@ -159,8 +230,10 @@ def read_topography(path: Path, *, key: str = "surface", height_unit: str | None
     unit, source, factor, size_factor = length_units(path, unit, height_unit, key)
     heights *= factor
     sizes_out = tuple(s * size_factor for s in sizes_out) if sizes_out is not None else None
+    heights, filled = _filled(heights, sizes_out, periodic, fill, path, key)
     return Topography(
         path=path, heights=heights, physical_sizes=sizes_out, periodic=periodic, unit=unit,
         format=type(reader).__name__.removesuffix("Reader"), channel=str(getattr(channel, "name", channel.index)),
-        metadata=info, unit_source=source,
+        metadata=info, unit_source=source, filled=filled,
+        fill_method=f"{fill}: {FILL_DESCRIPTION[fill]}" if filled is not None else None,
     )

@@ -28,7 +28,7 @@ from roughcontact.stage import Figure, Param, Shape, Stage, StageInput, UserErro
 
 from .figures.topography import figure_coherence, figure_measured_psd
 from .shared.maps import topography_files
-from .shared.measured import container_files, merged_psd, mode_factor, prepared_files
+from .shared.measured import container_files, measurements_entered, merged_psd, mode_factor, prepared_files
 from .shared.surfaces import CONTAINER_KEYS, MAP_KEYS, SURFACES, is_measured, surface_reads
 
 register_params(
@@ -93,6 +93,8 @@ def _describe(p, spec):
              rms_height_after_detrend_m=p["rms"])
     if "member" in p:  # a measurement of a contact.engineering container
         d["container_measurement"] = p["member"]
+    if p.get("filled"):  # undefined heights filled (fill_undefined): how many, where
+        d["undefined_filled"] = p["filled"]
     if p["analysis"] == "profiles":
         d["isotropic_conversion"] = (f"C(q) = c(H) C1D(q) / q with c(H) = Gamma(1+H)/(2 pi^1.5 Gamma(H+1/2)), "
                                      f"H = {spec['hurst']:g}; exact only for an isotropic self-affine surface with "
@@ -128,10 +130,13 @@ def _paired_spectra(prepared, specs, edges):
     return {"substrate": joint, "solid": [{"n": s["n"], "q": s["q"], "C11": s["C22"]} for s in joint]}
 
 
-def _surface_vars(name, spectra, described, bpd):
-    """The merged PSD of one surface with its error, mean wavenumbers and modes per bin."""
+def _surface_vars(name, spectra, described, bpd, entered):
+    """The merged PSD of one surface with its error, mean wavenumbers and modes per bin
+    (``entered``: :func:`measurements_entered`)."""
     q, C, n, err, ratio = merged_psd(spectra)
-    common = {"surface": name, "files": json.dumps(described),
+    filled = [f"{d['path']}: {d['undefined_filled']['points']} points" for d in described if "undefined_filled" in d]
+    common = {"surface": name, "files": json.dumps(described), **entered,
+              **({"undefined_filled": "; ".join(filled)} if filled else {}),
               "convention": "Persson, C(q) = (2 pi)^-2 int d^2x <hh> e^-iqx",
               "radial_average": f"mean over Fourier modes with |q| in log bins, {bpd} per decade",
               "merge": "in each bin, the files (measurements) with modes there averaged with weights n, their "
@@ -202,7 +207,7 @@ def compute_topography(inp: StageInput) -> xr.Dataset:
     data_vars, keep = {}, np.zeros(centres.size, bool)
     for name in specs:
         described = [_describe(p, specs[name]) for p in prepared[name]]
-        found, has = _surface_vars(name, spectra[name], described, bpd)
+        found, has = _surface_vars(name, spectra[name], described, bpd, measurements_entered(prepared[name]))
         if hursts[name] is not None:
             found[f"psd_{name}_measured"][1]["line_scan_hurst"] = _hurst_note(hursts[name])
         data_vars.update(found)

@@ -255,3 +255,65 @@ def test_builtin_container_scene_merges_pairs_and_records_provenance(tmp_path):
     assert ok.sum() > 15 and abs(np.average(eta[ok], weights=1 / err[ok] ** 2) - 0.6) < 0.05
     psd = res["psd"]
     assert np.all(psd["psd_substrate_error"].values > 0) and np.all(psd["psd_combined_error"].values > 0)
+
+
+# -- measurements as instruments deliver them ----------------------------------------------------
+
+
+def _profile_text(rng, n=200, length_um=50.0) -> bytes:
+    """A stylus-like line scan sampled at uneven x (um) with heights (um), as text columns."""
+    x = np.sort(rng.uniform(0.0, length_um, n))
+    x[0], x[-1] = 0.0, length_um
+    h = 0.1 * np.cumsum(rng.standard_normal(n))
+    return "".join(f"{a:.6f} {b:.6f}\n" for a, b in zip(x, h, strict=True)).encode()
+
+
+def test_non_uniform_line_scan_left_out_with_a_warning_naming_it(tmp_path):
+    """A container with two maps and one non-uniformly sampled line scan: the line scan is left
+    out with a warning naming it, the PSD is merged from the two maps, and the result says
+    which measurements entered and which were left out (and why)."""
+    from roughcontact.errors import SceneWarning
+
+    rng = np.random.default_rng(30)
+    write_container(tmp_path / "c.zip", "s", [
+        {"name": "wide", "heights": rng.standard_normal((64, 64)), "size": [40.0, 40.0], "unit": "um"},
+        {"name": "stylus", "datafile": "stylus.txt", "raw": _profile_text(rng), "unit": "um", "size": [50.0]},
+        {"name": "narrow", "heights": rng.standard_normal((64, 64)), "size": [5.0, 5.0], "unit": "um"}])
+    with pytest.warns(SceneWarning, match=r"left out measurement 'stylus' \(data file 'stylus.txt'\): a non-uniformly "
+                                          r"sampled line scan \(200 points"):
+        res = _run(tmp_path, {"substrate": {"kind": "container", "container": str(tmp_path / "c.zip")}},
+                   ("topography",))
+    attrs = res["base"]["topography"]["psd_substrate_measured"].attrs
+    assert json.loads(attrs["measurements_entered"]) == ["wide", "narrow"]
+    (left,) = json.loads(attrs["measurements_left_out"])
+    assert left["measurement"] == "stylus" and left["datafile"] == "stylus.txt" and "non-uniformly" in left["reason"]
+    assert [d["container_measurement"]["measurement"] for d in json.loads(attrs["files"])] == ["wide", "narrow"]
+
+
+def test_container_of_non_uniform_line_scans_only_is_refused(tmp_path):
+    rng = np.random.default_rng(31)
+    write_container(tmp_path / "c.zip", "s", [{"name": n, "datafile": f"{n}.txt", "raw": _profile_text(rng),
+                                               "size": [50.0], "unit": "um"} for n in ("p1", "p2")])
+    with pytest.raises(UserError, match=r"no measurement can be used: measurement 'p1' .*measurement 'p2'"):
+        READERS["container"](tmp_path / "c.zip", key="substrate")
+
+
+def test_container_undefined_heights_refused_or_filled(tmp_path):
+    """A measurement with undefined heights (NaN in the data file): refused naming
+    fill_undefined; with fill_undefined = 'harmonic' filled and recorded."""
+    rng = np.random.default_rng(32)
+    holed = rng.standard_normal((32, 32))
+    holed[5, 6] = holed[20, 21] = np.nan
+    write_container(tmp_path / "c.zip", "s", [
+        {"name": "optical", "heights": holed, "size": [40.0, 40.0], "unit": "um"},
+        {"name": "afm", "heights": rng.standard_normal((32, 32)), "size": [5.0, 5.0], "unit": "um"}])
+    raw = {"substrate": {"kind": "container", "container": str(tmp_path / "c.zip")}}
+    with pytest.raises(UserError, match=r"2 of 1024 heights are missing .*substrate.fill_undefined") as info:
+        _run(tmp_path, raw, ("topography",))
+    assert info.value.key == "substrate.fill_undefined"
+    raw["substrate"]["fill_undefined"] = "harmonic"
+    res = _run(tmp_path, raw, ("topography",))
+    described = json.loads(res["base"]["topography"]["psd_substrate_measured"].attrs["files"])
+    note = described[0]["undefined_filled"]
+    assert note["points"] == 2 and note["first_indices"] == [[5, 6], [20, 21]] and note["regions"] == 2
+    assert "undefined_filled" not in described[1]

@@ -27,9 +27,28 @@ def topography_files(name: str) -> FileInput:
     (the scene's ``height_unit`` for files that do not say their unit)."""
 
     def options(params):
-        return dict(key=name, height_unit=params[name].get("height_unit"))
+        return dict(key=name, height_unit=params[name].get("height_unit"), fill=params[name].get("fill_undefined"))
 
     return FileInput(f"{name}.files", reader="topography", options=options)
+
+
+def filled_note(topo) -> dict | None:
+    """What the result records about the undefined heights the reader filled (None if none
+    was): how, how many, and where (connected regions, the largest, their bounding box, the
+    first indices)."""
+    mask = getattr(topo, "filled", None)
+    if mask is None:
+        return None
+    from scipy import ndimage
+
+    labels, regions = ndimage.label(mask)
+    sizes = np.bincount(labels.ravel())[1:]
+    where = np.argwhere(mask)
+    return {"method": topo.fill_method,
+            "points": int(mask.sum()), "of_points": int(mask.size), "fraction": float(mask.mean()),
+            "regions": int(regions), "largest_region_points": int(sizes.max()),
+            "bounding_box_index": [[int(a), int(b)] for a, b in zip(where.min(axis=0), where.max(axis=0), strict=True)],
+            "first_indices": [[int(i) for i in idx] for idx in where[:10]]}
 
 
 def _sizes(name, spec, topo, path):
@@ -47,11 +66,11 @@ def _sizes(name, spec, topo, path):
 def prepare_map(name: str, spec: dict, topo, index: int) -> dict:
     """One file of surface ``name`` checked, with its sizes and processing settings.
 
-    ``topo`` is what the topography reader returned (heights in metres). Missing points,
-    infinite values and too small grids are a :class:`UserError` naming the file. Returns a
-    dict with ``h`` (heights, m), ``sizes`` (m), ``periodic``, ``detrend``, ``window``,
-    ``analysis`` and what to record about the file (``unit``, ``size_source``, ``path``,
-    ``format``, ``index``).
+    ``topo`` is what the topography reader returned (heights in metres). Missing points (not
+    filled by the reader: ``name.fill_undefined``), infinite values and too small grids are a
+    :class:`UserError` naming the file. Returns a dict with ``h`` (heights, m), ``sizes`` (m),
+    ``periodic``, ``detrend``, ``window``, ``analysis`` and what to record about the file
+    (``unit``, ``size_source``, ``path``, ``format``, ``index``, ``filled``: :func:`filled_note`).
     """
     key = f"{name}.files"
     path = str(topo.path)
@@ -60,22 +79,25 @@ def prepare_map(name: str, spec: dict, topo, index: int) -> dict:
     bad = np.isnan(h)
     if bad.any():
         first = tuple(int(i) for i in np.argwhere(bad)[0])
+        option = f"{name}.fill_undefined" if topo.unit_source != "container" else f"{name}.fill_undefined (or the " \
+                 "container's fill_undefined_data_mode)"
         raise UserError(
-            f"{int(bad.sum())} of {h.size} heights are missing (NaN or masked), first at index {first}; the FFT "
-            "needs a complete grid: fill them (interpolate) or crop the map in the instrument software",
-            file=path, key=key)
+            f"{int(bad.sum())} of {h.size} heights are missing (NaN or masked), first at index {first}; the FFT needs "
+            f"a complete grid: set {option} = 'harmonic' to interpolate them (SurfaceTopography's harmonic fill; where "
+            "and how many are recorded in the result), or crop the map in the instrument software", file=path,
+            key=f"{name}.fill_undefined")
     if not np.all(np.isfinite(h)):
         raise UserError("infinite height values", file=path, key=key)
     if h.ndim not in (1, 2) or min(h.shape) < (8 if h.ndim == 1 else 4) or h.shape[0] < 8:
-        raise UserError(f"too few points for a spectrum (shape {h.shape}; needs at least 8 along x)",
-                        file=path, key=key)
+        raise UserError(f"too few points for a spectrum (shape {h.shape}; needs at least 8 along x)", file=path,
+                        key=key)
     periodic = spec.get("periodic") if spec.get("periodic") is not None else topo.periodic
     detrend_how = spec.get("detrend") or ("mean" if periodic else "plane")
     window = spec.get("window") or ("none" if periodic else "hann")
     analysis = "profiles" if h.ndim == 1 else spec["analysis"]
     return dict(h=h, sizes=tuple(float(s) for s in sizes), periodic=bool(periodic), detrend=detrend_how,
                 window=window, analysis=analysis, unit=f"{topo.unit} ({topo.unit_source})", size_source=size_note,
-                path=path, format=topo.format, index=index, name=name)
+                path=path, format=topo.format, index=index, name=name, filled=filled_note(topo))
 
 
 def _cutoffs(p, spec):

@@ -14,6 +14,8 @@ docs/measured-data.md.
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import xarray as xr
 
@@ -41,7 +43,7 @@ def container_files(name: str) -> FileInput:
     """The container of surface ``name`` (kind container), read by the engine's container reader."""
 
     def options(params):
-        return dict(key=name, surface=params[name].get("surface"))
+        return dict(key=name, surface=params[name].get("surface"), fill=params[name].get("fill_undefined"))
 
     return FileInput(f"{name}.container", reader="container", options=options)
 
@@ -56,16 +58,30 @@ def _member(name: str, spec: dict, topo, index: int, container) -> dict:
     try:
         p = process_map(prepare_map(name, own, topo, index), own)
     except UserError as exc:
-        raise UserError(exc.message, file=exc.file, key=f"{name}.container") from None
+        own_key = exc.key if exc.key == f"{name}.fill_undefined" else f"{name}.container"
+        raise UserError(exc.message, file=exc.file, key=own_key) from None
     if p["cutoff"] == "given q_reliable":
         p["cutoff"] = f"container metadata: {meta['reliability_cutoff_source']}"
     p["member"] = {"container": str(container.path), "surface": container.surface, **meta}
+    p["left_out"] = list(getattr(container, "left_out", []))  # the container's measurements not read
     return p
+
+
+def measurements_entered(prepared: list[dict]) -> dict:
+    """Which measurements (or files) of one surface entered its PSD and which were left out
+    (a container's non-uniformly sampled line scans), as result attributes."""
+    entered = [p["member"]["measurement"] if "member" in p else p["path"] for p in prepared]
+    left = prepared[0].get("left_out", []) if prepared else []
+    attrs = {"measurements_entered": json.dumps(entered)}
+    if left:
+        attrs["measurements_left_out"] = json.dumps(left)
+    return attrs
 
 
 def prepared_files(name: str, spec: dict, files) -> list[dict]:
     """The prepared, processed scans of measured surface ``name`` (:func:`roughcontact.stages.maps.process_map`):
-    its files (kind topography) or the measurements of its container (kind container)."""
+    its files (kind topography) or the measurements of its container (kind container; those the
+    reader left out, non-uniformly sampled line scans, are listed in each one's ``left_out``)."""
     if spec["kind"] == "container":
         container = files[f"{name}.container"]
         return [_member(name, spec, t, i, container) for i, t in enumerate(container.measurements)]

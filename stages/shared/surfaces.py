@@ -118,6 +118,9 @@ TOPOGRAPHY_PARAMS = (
           doc="scan length along y, for files that do not say (default: square pixels)"),
     Param("periodic", "bool", default=None,
           doc="treat the data as periodic (default: as the file says; measurements are not)"),
+    Param("fill_undefined", "choice", default="none", choices=("none", "harmonic"),
+          doc="undefined heights (optical profilometers' non-measured points): 'none' refuses the file, 'harmonic' "
+              "fills them with SurfaceTopography's harmonic interpolation (how many and where: attribute 'files')"),
     Param("analysis", "choice", default="area", choices=("area", "profiles"),
           doc="maps: 2D radial PSD ('area') or average of the line scans along x ('profiles'); line scans: always "
               "profiles"),
@@ -144,15 +147,15 @@ CONTAINER_PARAMS = (
     Param("detrend", "choice", default=None, choices=tuple(DETREND_DEGREE),
           doc="polynomial removed before the FFT (default: the measurement's detrend_mode, else mean if periodic, "
               "else plane)"),
-    *(p for p in TOPOGRAPHY_PARAMS if p.name in ("analysis", "window", "hurst", "extend")),
+    *(p for p in TOPOGRAPHY_PARAMS if p.name in ("fill_undefined", "analysis", "window", "hurst", "extend")),
 )
 
 #: the keys of a measured surface (kind "topography") that reading and preparing its maps takes
 #: (units, sizes, detrending, window, analysis, reliability cutoffs); ``extend`` and ``hurst`` are not among them
-MAP_KEYS = ("files", "height_unit", "size_x", "size_y", "periodic", "analysis", "detrend", "window", "tip_radius",
-            "resolution", "q_reliable")
+MAP_KEYS = ("files", "height_unit", "size_x", "size_y", "periodic", "fill_undefined", "analysis", "detrend", "window",
+            "tip_radius", "resolution", "q_reliable")
 #: the same for a contact.engineering container (kind "container"), whose metadata gives the rest
-CONTAINER_KEYS = ("container", "surface", "detrend", "analysis", "window")
+CONTAINER_KEYS = ("container", "surface", "fill_undefined", "detrend", "analysis", "window")
 
 
 def surface_reads(by_kind: dict) -> tuple[ByKind, ...]:
