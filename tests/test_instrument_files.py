@@ -4,7 +4,9 @@ SurfaceTopography authors; the contact.engineering container container-2.zip hol
 CC BY 4.0 licence). Neither the PyPI sdist nor the wheel of SurfaceTopography ships them (its
 MANIFEST.in prunes test/), so they are not in this repository: point
 ROUGHCONTACT_INSTRUMENT_FILES at a folder holding them (a checkout's
-test/file_format_examples) and these tests run; without it they are skipped.
+test/file_format_examples), or put them in the project's shared folder beside the checkout
+(shared/data/instrument_files, which CI receives), and these tests run; without them they are
+skipped.
 
 The expected shapes, sizes, units and numbers of undefined points are those the files
 declare (and SurfaceTopography's tests assert)."""
@@ -25,7 +27,9 @@ from roughcontact.errors import SceneWarning, UserError  # noqa: E402
 from roughcontact.readers import READERS  # noqa: E402
 
 pytest.importorskip("SurfaceTopography")
-FOLDER = Path(os.environ.get("ROUGHCONTACT_INSTRUMENT_FILES", "/nonexistent"))
+#: where CI finds the files when the project's shared folder (beside the checkout) holds them
+SHARED = Path(__file__).resolve().parents[2] / "shared" / "data" / "instrument_files"
+FOLDER = Path(os.environ.get("ROUGHCONTACT_INSTRUMENT_FILES", SHARED))
 pytestmark = pytest.mark.skipif(not FOLDER.is_dir(), reason="set ROUGHCONTACT_INSTRUMENT_FILES to SurfaceTopography's "
                                                          "test/file_format_examples to run the real-file tests")
 
