@@ -55,6 +55,7 @@ from .shared.mastercurve import (
     DMA_COORDS,
     DMA_OUTPUTS,
     DMA_PARAMS,
+    MODULI_TABLE_PARAMS,
     check_dma,
     dma_options,
     dma_variables,
@@ -112,12 +113,7 @@ _ELASTIC = (Param("E", "quantity", "Pa", lo=0.0, lo_open=True, doc="real, freque
 _FILE = (
     Param("path", "path", doc="text/CSV master curve at T_ref: frequency, E' and E'' (or tan delta) columns"),
     Param("columns", "intlist", default=(0, 1, 2), lo=0, doc="0-based column indices of frequency, E', E''/tan delta"),
-    Param("loss_column", "choice", default="loss_modulus", choices=("loss_modulus", "tan_delta"),
-          doc="what the third column holds"),
-    Param("frequency_unit", "str", default=None, doc="unit of the frequency column (else from the header)"),
-    Param("modulus_unit", "str", default=None, doc="unit of the modulus columns (else from the header)"),
-    Param("frequency", "choice", default="auto", choices=("auto", "cyclic", "angular"),
-          doc="cyclic f (omega = 2 pi f) or angular omega; auto: angular if the unit says rad, else cyclic"),
+    *MODULI_TABLE_PARAMS,
 )
 
 

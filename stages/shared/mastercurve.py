@@ -26,6 +26,17 @@ from roughcontact.physics.mastercurve import (
 from roughcontact.physics.viscoelastic import loss_modulus_from_tan_delta, prony_modulus
 from roughcontact.stage import Param, UserError, Var
 
+#: the keys of a table of moduli against frequency, the same for a measured master curve (``[modulus]
+#: kind = "file"``) and DMA sweeps (``kind = "dma"``): declared once here
+MODULI_TABLE_PARAMS = (
+    Param("loss_column", "choice", default="loss_modulus", choices=("loss_modulus", "tan_delta"),
+          doc="what the last column holds: E'' or tan delta"),
+    Param("frequency_unit", "str", default=None, doc="unit of the frequency column (else from the header)"),
+    Param("modulus_unit", "str", default=None, doc="unit of the modulus columns (else from the header)"),
+    Param("frequency", "choice", default="auto", choices=("auto", "cyclic", "angular"),
+          doc="cyclic f (omega = 2 pi f) or angular omega; auto: angular if the unit says rad, else cyclic"),
+)
+
 #: keys of ``[modulus] kind = "dma"``
 DMA_PARAMS = (
     Param("sweeps", "path",
@@ -34,13 +45,8 @@ DMA_PARAMS = (
     Param("column_names", "list", default=None,
           doc="the columns T, frequency, E', E''/tan delta by their names in the header (instead of columns)"),
     Param("sheet", "str", default=None, doc="Excel files: the sheet to read (default the first)"),
-    Param("loss_column", "choice", default="loss_modulus", choices=("loss_modulus", "tan_delta"),
-          doc="what the fourth column holds"),
     Param("temperature_unit", "str", default=None, doc="unit of the temperature column (else from the header)"),
-    Param("frequency_unit", "str", default=None, doc="unit of the frequency column (else from the header)"),
-    Param("modulus_unit", "str", default=None, doc="unit of the modulus columns (else from the header)"),
-    Param("frequency", "choice", default="auto", choices=("auto", "cyclic", "angular"),
-          doc="cyclic f (omega = 2 pi f) or angular omega; auto: angular if the unit says rad, else cyclic"),
+    *MODULI_TABLE_PARAMS,
     Param("temperature_tolerance", "quantity", "K", default=0.5, lo=0.0, lo_open=True,
           doc="rows within this of a sweep's first temperature belong to the sweep"),
     Param("fit", "choice", default="overlap", choices=("overlap", "wlf", "free"),
