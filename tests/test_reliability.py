@@ -31,7 +31,8 @@ def no_writes(monkeypatch):
 
 
 def _nothing_under(out):
-    return not out.exists() or not [p for p in out.rglob("*") if p.is_file() and p.name != ".roughcontact.lock"]
+    """A refused run writes nothing: no result, no lock file, not even the output folder."""
+    return not out.exists()
 
 
 # ----------------------------------------------------------------------------------------
@@ -347,3 +348,16 @@ def test_kernels_refuse_impossible_inputs():
     with pytest.raises(ValueError, match="sigma0"):
         friction_kernel(np.ones(3), np.ones(3), np.ones(3), np.ones(3), -1.0, 0.3)
     assert psd_combined(np.ones(3), np.ones(3), 1.0 + 1e-15) == pytest.approx(0.0, abs=1e-12)  # rounding passes
+
+
+def test_a_refused_run_creates_no_folder_and_leaves_no_lock(tmp_path, capsys, write_scene):
+    """README: a user error writes nothing: not the output folder, not the lock file in a folder
+    that exists already."""
+    bad = write_scene(make_scene(numerics=SMALL, contact={"zeta": [1e9]}))
+    code, err = _cli(capsys, "run", bad, "--outdir", tmp_path / "new" / "out", "--quiet")
+    assert code == 2 and "contact.zeta" in err
+    assert not (tmp_path / "new").exists()
+    (tmp_path / "kept").mkdir()
+    code, err = _cli(capsys, "run", bad, "--outdir", tmp_path / "kept", "--quiet")
+    assert code == 2 and "contact.zeta" in err
+    assert list((tmp_path / "kept").iterdir()) == []
