@@ -1,6 +1,6 @@
 """Command line: ``roughcontact run|plan|show|plot|scenes``.
 
-Exit codes: 0 ok, 1 failure or (for ``plan``) something would run, 2 user error.
+Exit codes: 0 ok, 1 failure or (for ``plan``) something would run, 2 user error, 130 interrupted (Ctrl-C).
 """
 
 from __future__ import annotations
@@ -85,7 +85,7 @@ def _main(args) -> int:
         return 0
     except KeyboardInterrupt:
         print("roughcontact: interrupted; nothing half-written is kept", file=sys.stderr)
-        return 1
+        return 130  # 128 + SIGINT, as shells report a command stopped by Ctrl-C
     except Exception:  # an internal error: say so, with the traceback for the bug report
         traceback.print_exc()
         print("roughcontact: internal error (a bug: please report it with the traceback above)", file=sys.stderr)

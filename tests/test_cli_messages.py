@@ -69,3 +69,14 @@ def test_scenes_lists_descriptions(capsys):
     for name, description in scenes.builtin_descriptions().items():
         assert f"{name:16s} {description}" in out
     assert "site-packages" not in out.split("(scene files in")[0]
+
+
+def test_ctrl_c_exits_130_as_shells_expect(tmp_path, capsys, monkeypatch, write_scene):
+    from roughcontact import engine
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(engine, "run", interrupted)
+    code = main(["run", str(write_scene(make_scene())), "--outdir", str(tmp_path / "out"), "--quiet"])
+    assert code == 130 and "interrupted" in _err(capsys)
