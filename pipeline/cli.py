@@ -51,7 +51,9 @@ def _parser() -> argparse.ArgumentParser:
     scene_command("accuracy", "measure each stage's error and cost on a ladder of resolutions; NetCDF table + PNG")
     show = sub.add_parser("show", help="what is in a result file and where it came from")
     show.add_argument("file", type=Path)
-    sub.add_parser("scenes", help="list the built-in scenes")
+    listing = sub.add_parser("scenes", help="list the built-in scenes, or copy one (with its data files) to start your own")
+    listing.add_argument("--copy", nargs=2, metavar=("NAME", "DIR"),
+                         help="copy the built-in scene NAME and the data files it reads into folder DIR")
     ref = sub.add_parser("reference", help="print the scene-file reference (Markdown)")
     del ref
     return ap
@@ -94,9 +96,16 @@ def _main(args) -> int:
 
 def _dispatch(args) -> int:
     if args.command == "scenes":
+        if args.copy:
+            written = scenes.copy_builtin(*args.copy)
+            for path in written:
+                print(f"copied {path}")
+            print(f"run it with: roughcontact run {written[0]}")
+            return 0
         for name, text in sorted(scenes.builtin_descriptions().items()):
             print(f"{name:16s} {text}")
-        print(f"(scene files in {scenes.default_scene_path().parent}; copy one to start your own)")
+        print(f"(scene files in {scenes.default_scene_path().parent}; to start your own, copy one with its data "
+              "files: roughcontact scenes --copy NAME DIR)")
         return 0
     if args.command == "reference":
         print(scenes.reference())

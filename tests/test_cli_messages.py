@@ -80,3 +80,20 @@ def test_ctrl_c_exits_130_as_shells_expect(tmp_path, capsys, monkeypatch, write_
     monkeypatch.setattr(engine, "run", interrupted)
     code = main(["run", str(write_scene(make_scene())), "--outdir", str(tmp_path / "out"), "--quiet"])
     assert code == 130 and "interrupted" in _err(capsys)
+
+
+@pytest.mark.parametrize("name", ["topography", "container", "dma_flash", "bem_topography", "default"])
+def test_scenes_copy_copies_the_scene_and_its_data_files(tmp_path, capsys, name):
+    """`roughcontact scenes --copy NAME DIR`: the copy reads its own data files, not the package's."""
+    from roughcontact import engine
+
+    assert main(["scenes", "--copy", name, str(tmp_path / "mine")]) == 0
+    copied = scenes.load(tmp_path / "mine" / f"{name}.toml")
+    plans = engine.plan(copied, tmp_path / "out")
+    read = [f for p in plans for v in p.file_paths.values() for f in (v if isinstance(v, tuple) else (v,))]
+    assert all(str(tmp_path / "mine") in str(path) for path in read), read
+    assert bool(read) == (name != "default")
+    before = sorted(p.stat().st_mtime_ns for p in (tmp_path / "mine").rglob("*") if p.is_file())
+    assert main(["scenes", "--copy", name, str(tmp_path / "mine")]) == 2  # never overwrites
+    assert "exists already" in _err(capsys)
+    assert sorted(p.stat().st_mtime_ns for p in (tmp_path / "mine").rglob("*") if p.is_file()) == before
