@@ -51,7 +51,8 @@ def _parser() -> argparse.ArgumentParser:
     scene_command("accuracy", "measure each stage's error and cost on a ladder of resolutions; NetCDF table + PNG")
     show = sub.add_parser("show", help="what is in a result file and where it came from")
     show.add_argument("file", type=Path)
-    listing = sub.add_parser("scenes", help="list the built-in scenes, or copy one (with its data files) to start your own")
+    listing = sub.add_parser("scenes",
+                             help="list the built-in scenes, or copy one (with its data files) to start your own")
     listing.add_argument("--copy", nargs=2, metavar=("NAME", "DIR"),
                          help="copy the built-in scene NAME and the data files it reads into folder DIR")
     ref = sub.add_parser("reference", help="print the scene-file reference (Markdown)")

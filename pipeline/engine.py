@@ -225,7 +225,8 @@ def _finish(ds: xr.Dataset, p: StagePlan) -> xr.Dataset:
         raise RuntimeError(f"stage {st.name} returned undeclared variable(s) {undeclared} (a bug in the stage)")
     for name in ds.variables:
         if name not in declared:
-            raise RuntimeError(f"stage {st.name} returned coordinate {name!r} that nothing declares (a bug in the stage)")
+            raise RuntimeError(f"stage {st.name} returned coordinate {name!r} that nothing declares "
+                               "(a bug in the stage)")
         stamp = declared[name].stamp()
         attrs = ds[name].attrs
         own = [a for a in ("units", "long_name", "standard_name") if a in attrs and attrs[a] != stamp.get(a)]
@@ -271,7 +272,8 @@ def run(scene: Scene, outdir: Path, targets: Iterable[str] | None = None, force:
     unlocked = plan(scene, outdir, targets, force, verify=False)
     checked = preflight.check(unlocked, {"base": scene, **scene.variants}, outdir)
     outdir = preflight.output_folder(outdir)
-    with preflight.locked(outdir, report, lock_timeout), open_scheduler(scheduler or scene.get("run.scheduler")) as compute_with:
+    scheduled = open_scheduler(scheduler or scene.get("run.scheduler"))
+    with preflight.locked(outdir, report, lock_timeout), scheduled as compute_with:
         results = _run(scene, outdir, targets, force, report, compute_with, verify, (unlocked, checked))
     for by_stage in results.values() if open_results else ():
         by_stage.open_all()
@@ -368,7 +370,8 @@ def conforms(ds: xr.Dataset, shape: Shape, label: str) -> None:
             raise RuntimeError(f"stage {label} computed {dim} of size {ds.sizes[dim]}, but its describe said {size} "
                                "(a bug in the stage)")
     for name, values in shape.coords.items():
-        if name not in shape.approximate and name in ds.coords and ds[name].ndim == 1 and ds.sizes.get(name) == len(values):
+        one_d = name in ds.coords and ds[name].ndim == 1 and ds.sizes.get(name) == len(values)
+        if name not in shape.approximate and one_d:
             computed = ds[name].values
             if computed.dtype.kind in "fiu" and not np.allclose(computed, values, rtol=1e-12, atol=0.0, equal_nan=True):
                 worst = float(np.nanmax(np.abs(computed - values) / np.abs(values)))

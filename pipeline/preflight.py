@@ -48,7 +48,8 @@ def arguments(scene, outdir, targets, force):
     if isinstance(targets, str):
         targets = (targets,)
     force = {force} if isinstance(force, str) else set(force or ())
-    if not all(isinstance(f, str) for f in force) or (targets is not None and not all(isinstance(t, str) for t in targets)):
+    names = list(force) + (list(targets) if targets is not None else [])
+    if not all(isinstance(name, str) for name in names):
         raise TypeError("force and targets take stage or variable names (a string or a list of strings)")
     return scene, Path(outdir), targets, force
 

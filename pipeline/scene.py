@@ -150,7 +150,7 @@ def copy_builtin(name: str, folder: str | Path) -> list[Path]:
         if target.exists() or (target.parent.exists() and not target.parent.is_dir()):
             raise UserError("exists already: copy into another folder, or move it away", file=str(target))
     try:
-        for src, target in zip(sources, targets):
+        for src, target in zip(sources, targets, strict=True):
             target.parent.mkdir(parents=True, exist_ok=True)
             shutil.copyfile(src, target)
     except OSError as exc:
