@@ -361,3 +361,62 @@ def test_a_refused_run_creates_no_folder_and_leaves_no_lock(tmp_path, capsys, wr
     code, err = _cli(capsys, "run", bad, "--outdir", tmp_path / "kept", "--quiet")
     assert code == 2 and "contact.zeta" in err
     assert list((tmp_path / "kept").iterdir()) == []
+
+
+def _refused_before_writing(tmp_path, raw, key, *words):
+    """Run the scene: a UserError naming ``key`` and ``words``, and nothing written (not the folder)."""
+    with pytest.raises(UserError) as info:
+        engine.run(scenes.from_dict(raw), tmp_path / "out", report=engine.Reporter(None))
+    assert info.value.key == key and all(w in info.value.format() for w in words), info.value.format()
+    assert len(info.value.format().splitlines()) == 1
+    assert not (tmp_path / "out").exists()
+    return info.value.format()
+
+
+def test_a_bem_grid_the_machine_cannot_hold_is_refused_naming_bem_grid(tmp_path, no_writes, monkeypatch):
+    """bem.grid = 8192 on a 3 GB machine: 200 bytes per pixel of the map, whatever the loads (was a
+    numpy memory error after three results were written)."""
+    pytest.importorskip("tamaas")
+    monkeypatch.setattr(sizing, "available_memory", lambda: 3 * 10**9)
+    raw = scenes.load("bem").raw
+    raw["bem"] = {**raw["bem"], "grid": 8192}
+    raw["contact"] = {**raw["contact"], "zeta": [4.0, 200.0]}  # the band a 8192 map resolves here
+    message = _refused_before_writing(tmp_path, raw, "bem.grid", "of memory", "pixels 6.71e+07 (bem.grid)")
+    assert "reduce bem.grid (" in message  # not the loads or the coherences: they do not change it
+    raw["bem"]["grid"] = 1024  # 1024^2 pixels x 200 bytes = 0.2 GB: accepted by the same estimate
+    sc = scenes.from_dict(raw)
+    estimate = [e for e in _estimates(sc, tmp_path) if e.label == "bem"][0]
+    assert 0.99 * 1024**2 * 8 * 25 <= estimate.working <= 3 * 1024**2 * 8 * 25
+
+
+def _estimates(sc, outdir):
+    captured = []
+    real = sizing.check
+
+    def keep(estimates, where):
+        captured.extend(estimates)
+        return real(estimates, where)
+
+    plans = engine.plan(sc, outdir)
+    try:
+        sizing.check = keep
+        engine.checked_notes(sc, plans, outdir)
+    finally:
+        sizing.check = real
+    return captured
+
+
+def test_a_validation_bandwidth_with_no_rung_under_max_grid_is_refused_before_writing(tmp_path, no_writes):
+    pytest.importorskip("tamaas")
+    raw = scenes.load("validation").raw
+    raw["validation"] = {**raw["validation"], "bandwidth": [16.0, 1e6], "max_grid": 64}
+    _refused_before_writing(tmp_path, raw, "validation.bandwidth", "bandwidth 1e+06", "max_grid is 64", "up to 16")
+
+
+def test_a_validation_max_grid_too_large_names_max_grid_not_the_loads(tmp_path, no_writes, monkeypatch):
+    pytest.importorskip("tamaas")
+    monkeypatch.setattr(sizing, "available_memory", lambda: 3 * 10**9)
+    raw = scenes.load("validation").raw
+    raw["validation"] = {**raw["validation"], "bandwidth": [4096.0], "pixels_per_wavelength": [2.0], "max_grid": 8192}
+    message = _refused_before_writing(tmp_path, raw, "validation.max_grid", "of memory")
+    assert "reduced_pressure" not in message
