@@ -449,3 +449,36 @@ LATE_CHECKS = [  # found only after upstream results were written, before the st
 @pytest.mark.parametrize("label, raw, key", LATE_CHECKS, ids=[c[0] for c in LATE_CHECKS])
 def test_friction_and_band_refusals_come_before_any_write(tmp_path, no_writes, label, raw, key):
     _refused_before_writing(tmp_path, raw(), key)
+
+
+def _unsaid_non_finite(ds) -> list[str]:
+    """Variables holding NaN or +-inf that their attributes do not mention."""
+    out = []
+    for name, var in ds.data_vars.items():
+        if var.dtype.kind != "f":
+            continue
+        said = " ".join(str(v) for k, v in var.attrs.items() if k in ("comment", "nan_reason"))
+        values = np.asarray(var.values)
+        if np.isnan(values).any() and "NaN" not in said:
+            out.append(f"{name}: NaN")
+        if np.isinf(values).any() and "inf" not in said:
+            out.append(f"{name}: inf")
+    return out
+
+
+def test_non_finite_values_are_said_in_the_variables_attributes(tmp_path):
+    """NaN in the empty q bins of topography.nc, +inf in small_load_stiffness for identical surfaces
+    at eta = 1: said in the variables' comment, where a reader of the file finds it."""
+    raw = scenes.load("topography").raw
+    home = scenes.builtin_scenes()["topography"].parent
+    for side in ("substrate", "solid"):
+        raw[side] = {**raw[side], "files": [str(home / f) for f in raw[side]["files"]]}
+    raw.pop("variants", None)
+    raw["outputs"] = {"variables": ["psd_substrate_measured", "coherence"]}
+    topo = engine.run(scenes.from_dict(raw), tmp_path / "topo", report=engine.Reporter(None))["base"]["topography"]
+    assert np.isnan(topo["psd_substrate_measured"].values).any()  # the case in point is there
+    assert _unsaid_non_finite(topo) == []
+    stiff = engine.run(scenes.from_dict(make_scene(numerics=SMALL, outputs={"variables": ["small_load_stiffness"]})),
+                       tmp_path / "stiff", report=engine.Reporter(None))["base"]["stiffness"]
+    assert np.isinf(stiff["small_load_stiffness"].sel(eta=1.0).values).all()
+    assert _unsaid_non_finite(stiff) == []
