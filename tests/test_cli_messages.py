@@ -97,3 +97,18 @@ def test_scenes_copy_copies_the_scene_and_its_data_files(tmp_path, capsys, name)
     assert main(["scenes", "--copy", name, str(tmp_path / "mine")]) == 2  # never overwrites
     assert "exists already" in _err(capsys)
     assert sorted(p.stat().st_mtime_ns for p in (tmp_path / "mine").rglob("*") if p.is_file()) == before
+
+
+def test_readme_agrees_with_the_scenes_and_the_accuracy_page():
+    """README repeats the default scene's description (as `roughcontact scenes` prints it) and the
+    measured-spectrum errors at the default resolution as docs/accuracy.md measures them."""
+    import re
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parent.parent
+    readme = " ".join((root / "README.md").read_text().split())
+    assert f"`default` ({scenes.builtin_descriptions()['default']};" in readme
+    row = re.search(r"^\| 50 \(default\) \| (.*) \|$", (root / "docs" / "accuracy.md").read_text(), flags=re.M)
+    area_low, area_high, gap_low, gap_high = row.group(1).split(" | ")
+    assert (f"the error is {area_low} in A/A0 and {gap_low} in the mean separation u where zeta < 8, {area_high} "
+            f"and {gap_high} from zeta = 16 up") in readme
