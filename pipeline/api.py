@@ -71,6 +71,9 @@ def load_scene(source: str | Path | Mapping | Scene | None = None, *, preset: st
         ``"fast"``, ``"default"`` or ``"accurate"``: every resolution setting the scene does not
         set itself (as ``[numerics] preset`` or ``--preset``).
     """
+    if not isinstance(source, (str, Path, Mapping, Scene, type(None))):
+        raise TypeError(f"expected a scene: a TOML file, a built-in scene name, a dict or a Scene (or None for the "
+                        f"default scene), got {type(source).__name__} {source!r:.60}")
     if isinstance(source, Scene):
         if preset is None:
             return source
@@ -86,6 +89,8 @@ def load_scene(source: str | Path | Mapping | Scene | None = None, *, preset: st
 
 
 def _outdir(sc: Scene, outdir: str | Path | None) -> Path:
+    if outdir is not None and (not isinstance(outdir, (str, Path)) or not str(outdir)):
+        raise TypeError(f"outdir must be a folder path (str or pathlib.Path) or None, got {outdir!r:.60}")
     return Path(outdir) if outdir is not None else engine.default_outdir(sc)
 
 
@@ -132,10 +137,19 @@ def run(scene: str | Path | Mapping | Scene | None = None, outdir: str | Path | 
 def open_result(path: str | Path) -> xr.Dataset:
     """A result file (of any stage) loaded into memory, with its attributes: units and long
     names on every variable, provenance (``parameters``, ``input_files``, ``git_commit``, ...)
-    in ``attrs``."""
+    in ``attrs``. Any other NetCDF file (no ``stage_name``/``stage_key``: not a stage's result,
+    so no provenance to rely on) is refused with a UserError; open it with ``xarray.open_dataset``."""
+    if not isinstance(path, (str, Path)):
+        raise TypeError(f"expected the path of a result file (str or pathlib.Path), got {type(path).__name__}")
     path = Path(path)
     if not path.is_file():
         raise UserError("no such result file", file=str(path))
+    attrs = store.read_attrs(path)
+    if attrs is None:
+        raise UserError("not a readable NetCDF file", file=str(path))
+    if not {"stage_name", "stage_key"} <= set(attrs):
+        raise UserError("not the result of a roughcontact stage (no stage_name or stage_key attribute, so no "
+                        "provenance): open it with xarray.open_dataset", file=str(path))
     try:
         return store.open_result(path)
     except (OSError, ValueError) as exc:

@@ -1,6 +1,6 @@
 """Command line: ``roughcontact run|plan|show|plot|scenes``.
 
-Exit codes: 0 ok, 1 failure or (for ``plan``) something would run, 2 user error.
+Exit codes: 0 ok, 1 failure or (for ``plan``) something would run, 2 user error, 130 interrupted (Ctrl-C).
 """
 
 from __future__ import annotations
@@ -51,7 +51,10 @@ def _parser() -> argparse.ArgumentParser:
     scene_command("accuracy", "measure each stage's error and cost on a ladder of resolutions; NetCDF table + PNG")
     show = sub.add_parser("show", help="what is in a result file and where it came from")
     show.add_argument("file", type=Path)
-    sub.add_parser("scenes", help="list the built-in scenes")
+    listing = sub.add_parser("scenes",
+                             help="list the built-in scenes, or copy one (with its data files) to start your own")
+    listing.add_argument("--copy", nargs=2, metavar=("NAME", "DIR"),
+                         help="copy the built-in scene NAME and the data files it reads into folder DIR")
     ref = sub.add_parser("reference", help="print the scene-file reference (Markdown)")
     del ref
     return ap
@@ -85,7 +88,7 @@ def _main(args) -> int:
         return 0
     except KeyboardInterrupt:
         print("roughcontact: interrupted; nothing half-written is kept", file=sys.stderr)
-        return 1
+        return 130  # 128 + SIGINT, as shells report a command stopped by Ctrl-C
     except Exception:  # an internal error: say so, with the traceback for the bug report
         traceback.print_exc()
         print("roughcontact: internal error (a bug: please report it with the traceback above)", file=sys.stderr)
@@ -94,9 +97,16 @@ def _main(args) -> int:
 
 def _dispatch(args) -> int:
     if args.command == "scenes":
+        if args.copy:
+            written = scenes.copy_builtin(*args.copy)
+            for path in written:
+                print(f"copied {path}")
+            print(f"run it with: roughcontact run {written[0]}")
+            return 0
         for name, text in sorted(scenes.builtin_descriptions().items()):
             print(f"{name:16s} {text}")
-        print(f"(scene files in {scenes.default_scene_path().parent}; copy one to start your own)")
+        print(f"(scene files in {scenes.default_scene_path().parent}; to start your own, copy one with its data "
+              "files: roughcontact scenes --copy NAME DIR)")
         return 0
     if args.command == "reference":
         print(scenes.reference())

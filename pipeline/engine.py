@@ -266,16 +266,26 @@ def run(scene: Scene, outdir: Path, targets: Iterable[str] | None = None, force:
 
     scene, outdir, targets, force = preflight.arguments(scene, outdir, targets, force)
     report = report or Reporter()
+    # every check before anything is written, the output folder and its lock included: a refused
+    # run leaves no trace (the plan is made again under the lock; checked again only if it changed)
+    preflight.not_a_file(outdir)
+    unlocked = plan(scene, outdir, targets, force, verify=False)
+    checked = preflight.check(unlocked, {"base": scene, **scene.variants}, outdir)
     outdir = preflight.output_folder(outdir)
-    with (preflight.locked(outdir, report, lock_timeout),
-          open_scheduler(scheduler or scene.get("run.scheduler")) as compute_with):
-        results = _run(scene, outdir, targets, force, report, compute_with, verify)
+    scheduled = open_scheduler(scheduler or scene.get("run.scheduler"))
+    with preflight.locked(outdir, report, lock_timeout), scheduled as compute_with:
+        results = _run(scene, outdir, targets, force, report, compute_with, verify, (unlocked, checked))
     for by_stage in results.values() if open_results else ():
         by_stage.open_all()
     return results
 
 
-def _run(scene, outdir, targets, force, report, compute_with, verify=None):
+def _plan_facts(plans: list[StagePlan]) -> list[tuple]:
+    """What decides the preflight's verdict on a plan: per stage, its key, status and source."""
+    return [(p.variant, p.stage.name, p.key, p.status, p.source) for p in plans]
+
+
+def _run(scene, outdir, targets, force, report, compute_with, verify=None, checked=None):
     from .compute import chunk_sweeps
 
     plans = plan(scene, outdir, targets, force, verify)
@@ -284,8 +294,12 @@ def _run(scene, outdir, targets, force, report, compute_with, verify=None):
     for folder in {p.path.parent for p in plans}:
         store.clean_temporaries(folder)
     results = {v: StageResults(_open) for v in scenes}  # each result opened when first read
-    # read every input file, run every validation and check every size before anything computes or is written
-    files, shapes = preflight.check(plans, scenes, outdir)
+    # read every input file, run every validation and check every size before anything computes or is
+    # written: done before the lock already, again only if the plan changed since (another run, a damaged file)
+    if checked is not None and _plan_facts(checked[0]) == _plan_facts(plans):
+        files, shapes = checked[1]
+    else:
+        files, shapes = preflight.check(plans, scenes, outdir)
     for note in notes(plans, shapes):  # on a terminal; `plan` prints them always
         report.live(f"note: {note}")
     n = len(plans)
@@ -356,8 +370,8 @@ def conforms(ds: xr.Dataset, shape: Shape, label: str) -> None:
             raise RuntimeError(f"stage {label} computed {dim} of size {ds.sizes[dim]}, but its describe said {size} "
                                "(a bug in the stage)")
     for name, values in shape.coords.items():
-        if (name not in shape.approximate and name in ds.coords and ds[name].ndim == 1
-                and ds.sizes.get(name) == len(values)):
+        one_d = name in ds.coords and ds[name].ndim == 1 and ds.sizes.get(name) == len(values)
+        if name not in shape.approximate and one_d:
             computed = ds[name].values
             if computed.dtype.kind in "fiu" and not np.allclose(computed, values, rtol=1e-12, atol=0.0, equal_nan=True):
                 worst = float(np.nanmax(np.abs(computed - values) / np.abs(values)))

@@ -48,18 +48,25 @@ def arguments(scene, outdir, targets, force):
     if isinstance(targets, str):
         targets = (targets,)
     force = {force} if isinstance(force, str) else set(force or ())
-    if (not all(isinstance(f, str) for f in force)
-            or (targets is not None and not all(isinstance(t, str) for t in targets))):
+    names = list(force) + (list(targets) if targets is not None else [])
+    if not all(isinstance(name, str) for name in names):
         raise TypeError("force and targets take stage or variable names (a string or a list of strings)")
     return scene, Path(outdir), targets, force
 
 
-def output_folder(outdir) -> Path:
-    """The output folder, created if needed; a UserError naming it if it cannot be used."""
+def not_a_file(outdir) -> None:
+    """A UserError if the output folder's path is taken by something that is not a folder."""
     outdir = Path(outdir)
     if outdir.exists() and not outdir.is_dir():
         raise UserError("exists and is not a folder: give --outdir a folder (or a path that does not exist yet)",
                         file=str(outdir))
+
+
+def output_folder(outdir) -> Path:
+    """The output folder, created if needed; a UserError naming it if it cannot be used. The
+    engine calls it only once every check has passed: a refused run creates no folder."""
+    outdir = Path(outdir)
+    not_a_file(outdir)
     try:
         outdir.mkdir(parents=True, exist_ok=True)
     except OSError as exc:

@@ -110,6 +110,10 @@ def read_spectrum(path: Path, *, key: str, convention: str, convention_units: di
         value_unit = value_unit or (loaded.units[ic] if loaded.units else None)
         origin = {k: v and f"line {loaded.header_line}" for k, v in origin.items()}
         where = lambda i: f"line {loaded.lines[i]}"  # noqa: E731
+    if (not q_unit or not value_unit) and getattr(loaded, "header_note", None):
+        raise UserError(
+            f"{loaded.header_note}, so it gives no units: name every column in it (e.g. '# q [1/m]  C [m^4]  "
+            f"error [m^4]') or set {key}.q_unit and {key}.C_unit", file=str(path))
     if not q_unit or not value_unit:
         raise UserError(
             f"units of the {'q' if not q_unit else 'C'} column unknown: put them in the file's header "

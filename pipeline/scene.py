@@ -129,6 +129,44 @@ def builtin_descriptions() -> dict[str, str]:
     return out
 
 
+def copy_builtin(name: str, folder: str | Path) -> list[Path]:
+    """Copy the built-in scene ``name`` and every data file it (or a variant) reads into
+    ``folder``, in the same layout (``NAME.toml``, ``data/...``), so that the copy runs as it is.
+    Returns the files written; refuses (writing nothing) to overwrite a file."""
+    import shutil
+
+    builtin = builtin_scenes()
+    if name not in builtin:
+        raise UserError(f"no built-in scene {name!r} (built-in scenes: {', '.join(sorted(builtin))})"
+                        f"{did_you_mean(name, builtin)}", key="--copy")
+    source = builtin[name]
+    home = source.parent.resolve()
+    scene = load(source)
+    data = {f for sc in (scene, *scene.variants.values()) for f in _files_in(sc.values) if home in f.resolve().parents}
+    sources = [source, *sorted(data)]
+    folder = Path(folder)
+    targets = [folder / f.resolve().relative_to(home) for f in sources]
+    for target in targets:
+        if target.exists() or (target.parent.exists() and not target.parent.is_dir()):
+            raise UserError("exists already: copy into another folder, or move it away", file=str(target))
+    try:
+        for src, target in zip(sources, targets, strict=True):
+            target.parent.mkdir(parents=True, exist_ok=True)
+            shutil.copyfile(src, target)
+    except OSError as exc:
+        raise UserError(f"cannot copy the scene here ({exc.strerror or exc})", file=str(folder)) from None
+    return targets
+
+
+def _files_in(value) -> list[Path]:
+    """Every existing file a scene's (SI) values name, however deep."""
+    if isinstance(value, dict):
+        return [f for v in value.values() for f in _files_in(v)]
+    if isinstance(value, (list, tuple)):
+        return [f for v in value for f in _files_in(v)]
+    return [value] if isinstance(value, Path) and value.is_file() else []
+
+
 def resolve(scene: str | None) -> Path:
     """A scene argument: a file path, or the name of a built-in scene, or None (default)."""
     if scene is None:

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import difflib
 import math
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Mapping
@@ -112,6 +113,9 @@ class Param:
         if isinstance(v, float) and not math.isfinite(v):
             raise UserError(f"{v} is not a finite number", key=key)
         u = f" {self.units}" if self.units else ""
+        if isinstance(v, float) and v != 0.0 and abs(v) < sys.float_info.min:  # sub-normal: 1/v overflows to inf
+            raise UserError(f"{v:g}{u} is below the smallest normal double ({sys.float_info.min:.3g}): its inverse "
+                            "overflows to infinity, and so would the results; give a physical value", key=key)
         if self.lo is not None and (v <= self.lo if self.lo_open else v < self.lo):
             raise UserError(f"must be {'>' if self.lo_open else '>='} {self.lo:g}{u}, got {v:g}{u}", key=key)
         if self.hi is not None and (v >= self.hi if self.hi_open else v > self.hi):
@@ -196,8 +200,11 @@ def _path(p: Param, raw: Any, key: str, base_dir: Path | None) -> Path:
     path = Path(raw).expanduser()
     if not path.is_absolute() and base_dir is not None:
         path = base_dir / path
+    if path.is_dir():
+        raise UserError(f"{str(path)!r} is a folder, not a file: give the path of the file in it", key=key)
     if not path.is_file():
-        raise UserError(f"file {str(path)!r} does not exist", key=key)
+        what = "is not a regular file" if path.exists() else "does not exist"
+        raise UserError(f"file {str(path)!r} {what}", key=key)
     return path.resolve()
 
 

@@ -43,9 +43,16 @@ class Estimate:
     working: int
     dims: dict  # dimension -> (size, scene key, size per block)
     parallel: int = 1  # blocks computed at once
+    #: where the shape names the scene keys of its ``work`` factors: those, then the keys of the sweep
+    #: dimensions a block is chunked along (what sets the working memory, named when a block does not fit)
+    work_keys: tuple = ()
+    work_text: str = ""  # the named work factors, e.g. "pixels 6.71e+07 (bem.grid)"
 
     def describe(self, per_block: bool = False) -> str:
         parts = []
+        if per_block and self.work_text:  # what sets the working memory: the work factors, the chunked dimensions
+            return "; ".join([self.work_text] + [f"{d} {b:g} ({k}) per block" for d, (n, k, b) in self.dims.items()
+                                                 if k in self.work_keys and d not in self.work_text])
         for dim, (size, key, block) in sorted(self.dims.items(), key=lambda kv: -kv[1][0]):
             n = block if per_block else size
             parts.append(f"{dim} {n:g}" + (f" ({key})" if key else "")
@@ -56,6 +63,10 @@ class Estimate:
         """The scene keys of the dimensions longer than 1 (per block of the computation), longest first."""
         order = sorted(self.dims.values(), key=lambda v: -(v[2] if per_block else v[0]))
         return [key for size, key, block in order if key and (block if per_block else size) > 1]
+
+    def memory_keys(self) -> list[str]:
+        """The scene keys to reduce when one block does not fit in memory."""
+        return list(dict.fromkeys(self.work_keys)) or self.keys(per_block=True)
 
 
 def sweep_keys() -> dict[str, str]:
@@ -159,7 +170,11 @@ def estimate(plan, scene, spanned: dict[str, int], own, in_flight: int, lazy: fr
     parallel = min(in_flight, blocks)
     working = per_point * math.prod(block.values()) * parallel
     dims = {d: (n, own.keys.get(d) or keys.get(d, ""), block.get(d, n)) for d, n in sizes.items()}
-    return Estimate(plan.label, plan.path, result, working, dims, parallel)
+    named = {f: n for f, n in own.work.items() if f in own.keys and n > 1}
+    text = " x ".join(f"{f} {n:.3g} ({own.keys[f]})" for f, n in named.items())
+    work_keys = [own.keys[f] for f in named] + [dims[d][1] for d in spanned if named and dims[d][1] and d in chunked
+                                                 and block[d] > 1]
+    return Estimate(plan.label, plan.path, result, working, dims, parallel, tuple(work_keys), text)
 
 
 def check(estimates: list[Estimate], outdir: Path) -> None:
@@ -167,9 +182,10 @@ def check(estimates: list[Estimate], outdir: Path) -> None:
     memory = available_memory()
     for e in estimates:
         if e.working > memory:
-            keys = e.keys(per_block=True)
+            keys = e.memory_keys()
             raise UserError(
-                f"stage {e.label} would need about {human(e.working)} of memory at once ({e.describe(per_block=True)}"
+                f"stage {e.label} would need about {human(e.working)} of memory at once ("
+                + f"{e.describe(per_block=True)}"
                 + (f"; {e.parallel} blocks at a time" if e.parallel > 1 else "") + f") but this machine has "
                 f"{human(memory)} available: reduce "
                 f"{', '.join(keys) or 'the sizes'} (chunking bounds the memory of sweeps, not of a single point)",

@@ -45,6 +45,8 @@ class Table:
     names: list[str | None] = field(default_factory=list)
     units: list[str | None] = field(default_factory=list)
     header_line: int | None = None
+    #: why a header line was not used (it names another number of columns than the rows hold), or None
+    header_note: str | None = None
 
     def index(self, name) -> int:
         """The column of ``name`` (an index, or a name of the header, ignoring case and spaces)."""
@@ -206,10 +208,12 @@ def read_table(path: Path, sheet: str | None = None) -> Table:
             units[i] = None if unit in ("", "-") else unit
     else:
         names, units = _parse_header(header) if header else ([], [])
-    if names and len(names) != ncol:
-        names, units, header_line = [], [], None  # a header we cannot align with the columns names nothing
+    note = None
+    if names and len(names) != ncol:  # a header we cannot align with the columns names nothing
+        note = f"the header (line {header_line}) names {len(names)} column(s) but the rows hold {ncol}"
+        names, units, header_line = [], [], None
     return Table(path=path, data=np.array(rows, dtype=float), lines=np.array(lines), names=names, units=units,
-                 header_line=header_line)
+                 header_line=header_line, header_note=note)
 
 
 def first_bad(bad: np.ndarray, message, path: Path, where) -> None:

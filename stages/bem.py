@@ -134,10 +134,52 @@ def check_bem(inp: StageInput) -> None:
         measured_maps(inp, names)
 
 
+#: the dimensions each output spans (of the sweep's p and eta and the stage's own); the others it lacks
+_SPANS = {
+    **dict.fromkeys(("bem_contact_area_ratio", "bem_mean_gap", "bem_stress_overflow"), ("p", "eta", "realization")),
+    "bem_stress_histogram": ("p", "eta", "realization", "bem_stress_level"),
+    "bem_sigma": ("p", "eta", "bem_stress_level"),
+    **dict.fromkeys(("bem_hrms_combined", "bem_rms_slope_combined"), ("eta", "realization")),
+    **dict.fromkeys(("theory_variant_contact_area_ratio", "theory_variant_mean_separation",
+                     "area_ratio_variant_to_bem", "separation_ratio_variant_to_bem"), ("p", "eta", "theory")),
+    **dict.fromkeys(("bem_zeta", "bem_q_cut", "bem_system_size", "bem_pixel_size", "bem_grid", "E_star"), ()),
+}
+_DIMS_ALL = ("p", "eta", "zeta", "realization", "bem_stress_level", "theory")  # zeta: the contact stage's
+
+
+def _bem_shape(inp: StageInput, maps, points: int) -> Shape:
+    """The dimensions the stage adds (realizations; for ``bem`` also histogram bins and theory
+    variants) and its working memory: the solver's fields for one map, about 200 bytes (25
+    values) per pixel (docs/bem.md: ~150 measured), held once whatever the loads and coherences
+    (solved one after the other); the ``interface_bem`` stage, which shares this describe, also
+    keeps the gap maps of its 3 pressures per load (twice: as solved, and sorted)."""
+    n = maps["n"] if maps is not None else int(inp["bem.grid"])
+    realizations = 1 if maps is not None else int(inp["bem.realizations"])
+    keys = {"realization": "bem.realizations", "pixels": "bem.grid" if maps is None else "bem.surfaces"}
+    values_per_pixel = 25
+    if inp.stage == "interface_bem":
+        values_per_pixel += 6 * np.size(inp["load.p"])
+        return Shape(sizes={"realization": realizations}, coupled=("p", "eta"), keys=keys,
+                     work={"values_per_pixel": values_per_pixel, "pixels": n * n, "per_point": 1 / max(points, 1)})
+    sizes = {"realization": realizations, "bem_stress_level": int(inp["numerics.bem_stress_bins"]),
+             "theory": len(VARIANTS)}
+    lacks = {name: tuple(d for d in _DIMS_ALL if d not in spans) for name, spans in _SPANS.items()}
+    lacks.update({name: ("zeta", "realization", "bem_stress_level", "theory") for name in _SPAN_P_ETA})
+    return Shape(sizes=sizes, lacks=lacks, coupled=("p", "eta", "zeta"),
+                 keys={**keys, "bem_stress_level": "numerics.bem_stress_bins"},
+                 work={"values_per_pixel": values_per_pixel, "pixels": n * n, "per_point": 1 / max(points, 1)})
+
+
+#: the outputs over (p, eta) alone
+_SPAN_P_ETA = ("bem_contact_area_ratio_mean", "bem_contact_area_ratio_std", "bem_mean_gap_mean", "bem_mean_gap_std",
+               "theory_contact_area_ratio", "theory_mean_separation", "area_ratio_theory_to_bem",
+               "separation_ratio_theory_to_bem")
+
+
 def describe_bem(inp: StageInput) -> Shape:
-    """No dimension known in advance; the scene must give one pair of surfaces, and the BEM's
-    magnification must be among those the contact and separation stages compute (where the stage
-    reads them: the interface_bem stage does not)."""
+    """The dimensions it adds and its working memory (:func:`_bem_shape`); the scene must give one
+    pair of surfaces, and the BEM's magnification must be among those the contact and separation
+    stages compute (where the stage reads them: the interface_bem stage does not)."""
     names = map_surfaces(inp)
     maps = measured_maps(inp, names) if names else None
     psd = inp.upstream["psd"]
@@ -152,7 +194,10 @@ def describe_bem(inp: StageInput) -> Shape:
         values = inp.upstream[stage].coords.get("zeta") if stage in inp.upstream else None
         if values is not None:
             _zeta_index(values, zeta, stage, limit)
-    return Shape()
+    swept = {"p": np.size(inp["load.p"])}  # the sweep points the engine counts: those its upstream results span
+    for shape in inp.upstream.values():
+        swept.update({d: n for d, n in shape.sizes.items() if d in ("p", "eta", "zeta")})
+    return _bem_shape(inp, maps, int(np.prod(list(swept.values()))))
 
 
 def bem_band(inp: StageInput, q: np.ndarray, names: tuple[str, ...]) -> dict:

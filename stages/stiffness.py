@@ -95,7 +95,9 @@ register(
                                      attrs={"comment": INFINITE}, tolerance=1e-4),
             "stiffness_length": Var("m", "-du/d(ln p) = p / K, the decay length of the separation law at p "
                                          "(-> u0 at small load)"),
-            "small_load_stiffness": Var("Pa/m", "small-load limit p/u0 of the contact stiffness (u0 of eq 59)"),
+            "small_load_stiffness": Var("Pa/m", "small-load limit p/u0 of the contact stiffness (u0 of eq 59)",
+                                        attrs={"comment": "+inf where u0 = 0: the surfaces fit exactly (combined PSD "
+                                                          "zero, e.g. identical surfaces with eta = 1)"}),
             "E_star": E_STAR,
         },
         figures=(Figure("stiffness", "contact stiffness K = -dp/du against p/E*, and K u0/p",

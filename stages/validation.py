@@ -17,7 +17,18 @@ import numpy as np
 import xarray as xr
 
 from roughcontact.physics.validation import FIELDS, bem_block
-from roughcontact.stage import Figure, Param, Section, Shape, Stage, StageInput, Var, register, register_section
+from roughcontact.stage import (
+    Figure,
+    Param,
+    Section,
+    Shape,
+    Stage,
+    StageInput,
+    UserError,
+    Var,
+    register,
+    register_section,
+)
 
 from .bem import solver
 from .figures.validation import figure_kappa, figure_separation_ratio
@@ -65,8 +76,17 @@ BEM_KEYS = (*MATERIAL_KEYS, "interface.eta", "numerics.bem_tolerance", "numerics
 
 
 def check_validation_bem(inp: StageInput) -> None:
-    """The optional dependency (tamaas)."""
+    """The optional dependency (tamaas), and a BEM grid for every bandwidth: a bandwidth whose
+    coarsest rung exceeds max_grid would have no task solved (and the table nothing to compare)."""
     solver()
+    coarsest = float(np.min(inp["validation.pixels_per_wavelength"]))
+    for bandwidth in np.atleast_1d(inp["validation.bandwidth"]):
+        if coarsest * bandwidth > inp["validation.max_grid"]:
+            raise UserError(
+                f"bandwidth {bandwidth:g} needs a BEM grid of at least {coarsest * bandwidth:.6g} pixels per side "
+                f"(pixels_per_wavelength {coarsest:g} x bandwidth) but validation.max_grid is "
+                f"{inp['validation.max_grid']}: no rung would be solved; use bandwidths up to "
+                f"{inp['validation.max_grid'] / coarsest:g} (or a larger max_grid)", key="validation.bandwidth")
 
 
 def compute_validation_bem(inp: StageInput) -> xr.Dataset:
@@ -116,11 +136,15 @@ def _one_per_block(da: xr.DataArray) -> xr.DataArray:
 
 def describe_validation_bem(inp: StageInput) -> Shape:
     """Working memory per load of a task: the solver's fields, about 200 bytes (25 values) per
-    pixel of the largest map (docs/bem.md: ~150 measured), shared by the task's loads, which one
-    task solves together (never chunked)."""
+    pixel of the largest map solved (pixels_per_wavelength x bandwidth, at most max_grid; docs/bem.md:
+    ~150 measured), shared by the task's loads, which one task solves together (never chunked).
+    A map too large is blamed on validation.max_grid, which caps it (not on the loads)."""
     loads = max(np.size(inp["validation.reduced_pressure"]), 1)
-    return Shape(work={"values_per_pixel": 25, "pixels": int(inp["validation.max_grid"]) ** 2, "per_load": 1 / loads},
-                 coupled=("reduced_pressure",))
+    grids = np.outer(np.atleast_1d(inp["validation.bandwidth"]), np.atleast_1d(inp["validation.pixels_per_wavelength"]))
+    solved = grids[grids <= inp["validation.max_grid"]]
+    largest = int(solved.max()) if solved.size else int(inp["validation.max_grid"])
+    return Shape(work={"values_per_pixel": 25, "pixels": largest ** 2, "per_load": 1 / loads},
+                 keys={"pixels": "validation.max_grid"}, coupled=("reduced_pressure",))
 
 
 _DIMS = "(hurst, bandwidth, eta, realization, pixels_per_wavelength, reduced_pressure)"

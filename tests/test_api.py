@@ -78,6 +78,30 @@ def test_bad_input_raises_a_user_error_naming_the_key(tmp_path):
         rc.open_result(tmp_path / "nothing.nc")
 
 
+@pytest.mark.parametrize("call", [lambda out: rc.run(42, out, progress=False),
+                                  lambda out: rc.run(["default"], out, progress=False),
+                                  lambda out: rc.plan(3.5, out),
+                                  lambda out: rc.load_scene(b"default"),
+                                  lambda out: rc.run("default", 42, progress=False)],
+                         ids=["run(42)", "run([...])", "plan(3.5)", "load_scene(bytes)", "outdir 42"])
+def test_what_is_not_a_scene_is_a_type_error_and_writes_nothing(tmp_path, monkeypatch, call):
+    """docs/reliability.md: anything else is a TypeError saying what is expected (not "no scene file '42'")."""
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(TypeError, match="expected a scene|outdir must be a folder path"):
+        call(tmp_path / "out")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_open_result_refuses_a_netcdf_file_that_is_no_stage_result(tmp_path):
+    xr.Dataset({"x": ("i", np.arange(3.0))}).to_netcdf(tmp_path / "foreign.nc")
+    with pytest.raises(UserError, match="not the result of a roughcontact stage") as info:
+        rc.open_result(tmp_path / "foreign.nc")
+    assert str(tmp_path / "foreign.nc") in info.value.format()
+    (tmp_path / "junk.nc").write_bytes(b"not a netcdf file")
+    with pytest.raises(UserError, match="not a readable NetCDF file"):
+        rc.open_result(tmp_path / "junk.nc")
+
+
 def test_importing_the_package_imports_no_heavy_module():
     code = ("import sys, roughcontact; "
             "heavy = [m for m in ('xarray', 'dask', 'pint', 'matplotlib', 'netCDF4', 'scipy') if m in sys.modules]; "

@@ -14,7 +14,7 @@ def _run(tmp_path, capsys, path):
     assert code == 2, err
     assert "Traceback" not in err
     assert len(err.splitlines()) == 1, err
-    assert not out.exists() or not any(out.rglob("*.nc"))
+    assert not out.exists()  # nothing written: no result, no lock file, not even the folder
     return err
 
 
@@ -38,6 +38,10 @@ CASES = [
     ("hrms and C0", dict(substrate=dict(SURFACE, C0="1e-36 m^4")), "exactly one of 'hrms' and 'C0'"),
     ("unknown kind", dict(substrate=dict(SURFACE, kind="selfaffine")), "did you mean 'self_affine'"),
     ("unknown output", dict(outputs={"variables": ["contact_area"]}), "did you mean 'contact_area_ratio'"),
+    ("sub-normal viscosity", dict(leakage={"viscosity": "5e-324 Pa*s"},
+                                  outputs={"variables": ["leak_rate_critical_junction"]}),
+     "leakage.viscosity: 4.94066e-324 Pa*s is below the smallest normal double"),
+    ("sub-normal modulus", dict(material={"E": "1e-320 GPa"}), "is below the smallest normal double"),
 ]
 
 
@@ -68,6 +72,8 @@ PSD_FILES = [
     ("no data", "# q [1/m] C [m^4]\n# nothing here\n", "", "no data"),
     ("text in data", "# q [1/m] C [m^4]\n1e8 1e-30\n1e9 abc\n", "line 3", "not a number"),
     ("no units", "1e8 1e-30\n1e9 1e-33\n1e10 1e-36\n", "", "units of the q column unknown"),
+    ("header of 2 columns, rows of 3", "# q [1/m]  C [m^4]\n1e8 1e-30 1\n1e9 1e-33 1\n1e10 1e-36 1\n", "",
+     "the header (line 1) names 2 column(s) but the rows hold 3"),
 ]
 
 
@@ -91,3 +97,11 @@ def test_required_key_is_needed_only_by_stages_that_read_it(tmp_path, capsys, wr
     raw["outputs"] = {"variables": ["contact_area_ratio"]}
     err = _run(tmp_path, capsys, write_scene(raw, "needs_e.toml"))
     assert "material.E: missing required key (stage contact needs it)" in err
+
+
+def test_a_psd_path_that_is_a_folder_is_called_a_folder(tmp_path, capsys, write_scene):
+    (tmp_path / "spectra").mkdir()
+    path = write_scene(make_scene(substrate={"kind": "psd_file", "path": str(tmp_path / "spectra"), "extend": "zero"},
+                                  solid=None, grid={"q_min": "1e8 1/m", "q_max": "1e10 1/m"}))
+    err = _run(tmp_path, capsys, path)
+    assert "substrate.path" in err and "is a folder, not a file" in err and "does not exist" not in err

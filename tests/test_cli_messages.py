@@ -69,3 +69,46 @@ def test_scenes_lists_descriptions(capsys):
     for name, description in scenes.builtin_descriptions().items():
         assert f"{name:16s} {description}" in out
     assert "site-packages" not in out.split("(scene files in")[0]
+
+
+def test_ctrl_c_exits_130_as_shells_expect(tmp_path, capsys, monkeypatch, write_scene):
+    from roughcontact import engine
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(engine, "run", interrupted)
+    code = main(["run", str(write_scene(make_scene())), "--outdir", str(tmp_path / "out"), "--quiet"])
+    assert code == 130 and "interrupted" in _err(capsys)
+
+
+@pytest.mark.parametrize("name", ["topography", "container", "dma_flash", "bem_topography", "default"])
+def test_scenes_copy_copies_the_scene_and_its_data_files(tmp_path, capsys, name):
+    """`roughcontact scenes --copy NAME DIR`: the copy reads its own data files, not the package's."""
+    from roughcontact import engine
+
+    assert main(["scenes", "--copy", name, str(tmp_path / "mine")]) == 0
+    copied = scenes.load(tmp_path / "mine" / f"{name}.toml")
+    plans = engine.plan(copied, tmp_path / "out")
+    read = [f for p in plans for v in p.file_paths.values() for f in (v if isinstance(v, tuple) else (v,))]
+    assert all(str(tmp_path / "mine") in str(path) for path in read), read
+    assert bool(read) == (name != "default")
+    before = sorted(p.stat().st_mtime_ns for p in (tmp_path / "mine").rglob("*") if p.is_file())
+    assert main(["scenes", "--copy", name, str(tmp_path / "mine")]) == 2  # never overwrites
+    assert "exists already" in _err(capsys)
+    assert sorted(p.stat().st_mtime_ns for p in (tmp_path / "mine").rglob("*") if p.is_file()) == before
+
+
+def test_readme_agrees_with_the_scenes_and_the_accuracy_page():
+    """README repeats the default scene's description (as `roughcontact scenes` prints it) and the
+    measured-spectrum errors at the default resolution as docs/accuracy.md measures them."""
+    import re
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parent.parent
+    readme = " ".join((root / "README.md").read_text().split())
+    assert f"`default` ({scenes.builtin_descriptions()['default']};" in readme
+    row = re.search(r"^\| 50 \(default\) \| (.*) \|$", (root / "docs" / "accuracy.md").read_text(), flags=re.M)
+    area_low, area_high, gap_low, gap_high = row.group(1).split(" | ")
+    assert (f"the error is {area_low} in A/A0 and {gap_low} in the mean separation u where zeta < 8, {area_high} "
+            f"and {gap_high} from zeta = 16 up") in readme
