@@ -70,7 +70,8 @@ def _figure(results, stage, var, xdim, xlabel, ylabel, title, scale=1.0, logy=Fa
         shade(ax, x, lo * scale, hi * scale, line.get_color())
         with np.errstate(divide="ignore", invalid="ignore"):
             ok = y > 0
-            shade(rel, x[ok], 100 * (lo[ok] / y[ok] - 1), 100 * (hi[ok] / y[ok] - 1), line.get_color())
+            shade(rel, x[ok], 100 * (lo[ok] / y[ok] - 1), 100 * (hi[ok] / y[ok] - 1), line.get_color(), alpha=0.08,
+                  edge=1.3)
         notes.update(extra)
     for res in results.values():
         if "bands" in res:

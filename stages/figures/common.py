@@ -247,14 +247,14 @@ def line_with_band(ax, x, da, level: float, *, across=False, **style):
     return line
 
 
-def shade(ax, x, lo, hi, color, across=False, alpha=0.18):
+def shade(ax, x, lo, hi, color, across=False, alpha=0.18, edge=0.6):
     """A band from ``lo`` to ``hi`` over ``x``: a light fill in ``color`` edged by thin lines of
     the same colour, so that where two bands overlap (their fills mix into a third shade) each
     band's edges still say whose it is. ``across``: the band spans the horizontal axis."""
     fill = ax.fill_betweenx if across else ax.fill_between
     fill(x, lo, hi, color=color, alpha=alpha, lw=0)
-    for edge in (lo, hi):
-        ax.plot(*((edge, x) if across else (x, edge)), color=color, lw=0.6, alpha=0.8, label="_band edge")
+    for limit in (lo, hi):
+        ax.plot(*((limit, x) if across else (x, limit)), color=color, lw=edge, alpha=0.8, label="_band edge")
 
 
 def band_note(results, ds) -> str:

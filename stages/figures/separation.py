@@ -43,7 +43,7 @@ def figure_separation(results):
             keep = law > 0
             # on top of the curves, in a style no case has: it would hide under a dashed (substrate-only) curve
             ax.plot(law[keep] * 1e9, np.log10(p[keep]), color="k", linestyle=(0, (1.5, 2.5)), linewidth=1.0,
-                    zorder=3, label="small-pressure law u0 ln(beta E*/p), eqs 58-60 (one per case)" if i == 0 else None)
+                    zorder=3, label="u0 ln(beta E*/p), eqs 58-60" if i == 0 else None)
     ax.set_xlabel("mean separation u (nm)")
     ax.set_ylabel("log10(p / E*)")
     ax.set_xlim(left=-0.03 * ax.get_xlim()[1])
