@@ -31,7 +31,7 @@ from conftest import make_scene  # noqa: E402
 
 from roughcontact import engine, scene as scenes, store  # noqa: E402
 from roughcontact.cli import main, scene_figures  # noqa: E402
-from roughcontact.stages.figures.common import CASE_STYLES, at_zeta, nominal, reduce_dims  # noqa: E402
+from roughcontact.stages.figures.common import CASE_STYLES, at_zeta, case_of, nominal, reduce_dims  # noqa: E402
 
 FAST = ["default", "friction", "topography", "seal"]
 SLOW = ["separation", "adhesion", "bem", "bem_topography", "large_sweep", "container", "dma_flash", "validation",
@@ -114,7 +114,7 @@ def _check_zeta(name, fig, results):
     assert np.min(np.abs(zetas / zeta - 1)) < 1e-3, f"{name}: zeta = {zeta} is not a computed magnification"
     if name.startswith("fig4"):
         return
-    case = "eta = 0" if "eta" in ds.dims and 0.0 in ds["eta"].values else "pair"
+    case = "eta = 0" if "eta" in ds.dims and 0.0 in ds["eta"].values else case_of(results["base"])
     line = next(ln for ax in fig.axes for ln in _data_lines(ax) if ln.get_label().startswith(case))
     data = ds.sel(eta=0.0) if case == "eta = 0" else ds
     x, y = (np.asarray(v, dtype=float) for v in line.get_data())
@@ -140,10 +140,17 @@ def _check_cases(name, fig, seen):
 def _check_labels(name, fig):
     """A title, and both axis labels on every axes that draws data (colour bars excepted)."""
     assert _titles(fig).strip(), f"{name}: no title"
-    for ax in fig.axes:
-        if ax.get_label() == "<colorbar>" or not (_data_lines(ax) or ax.images or ax.collections):
+    fig.canvas.draw()
+    axes = [ax for ax in fig.axes if ax.get_label() != "<colorbar>"]
+    for ax in axes:
+        if not (_data_lines(ax) or ax.images or ax.collections):
             continue
-        assert ax.get_xlabel() and ax.get_ylabel(), f"{name}: an axes without axis labels"
+        box = ax.get_position()
+        # a label may be shared: the x label by the panels of one column, the y label by one row
+        column = [a for a in axes if np.isclose(a.get_position().x0, box.x0, atol=0.02)]
+        row = [a for a in axes if np.isclose(a.get_position().y0, box.y0, atol=0.02)]
+        assert any(a.get_xlabel() for a in column), f"{name}: an axes without an x label"
+        assert any(a.get_ylabel() for a in row), f"{name}: an axes without a y label"
 
 
 def _check_png(name, path):
