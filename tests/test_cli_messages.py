@@ -19,7 +19,8 @@ def test_force_of_an_unknown_or_unused_stage_names_the_option(tmp_path, capsys, 
     assert main(["run", str(path), "--outdir", str(tmp_path / "o"), "--force", "frition"]) == 2
     assert _err(capsys) == "roughcontact: error: --force: no stage 'frition' (did you mean 'friction'?)"
     assert main(["run", str(path), "--outdir", str(tmp_path / "o"), "--force", "friction"]) == 2
-    assert _err(capsys) == "roughcontact: error: --force: the scene does not use stage 'friction' (it runs psd, contact)"
+    assert _err(capsys) == ("roughcontact: error: --force: the scene does not use stage 'friction' "
+                            "(it runs psd, contact)")
     assert not list((tmp_path / "o").rglob("*.nc"))  # refused before anything was computed
 
 
@@ -47,7 +48,8 @@ def test_plan_prints_changed_quantities_with_units(tmp_path, capsys, write_scene
     out = tmp_path / "o"
     assert main(["run", str(write_scene(make_scene(material={"E": "10 MPa"}))), "--outdir", str(out), "--quiet"]) == 0
     capsys.readouterr()
-    assert main(["plan", str(write_scene(make_scene(material={"E": "20 MPa"}), name="b.toml")), "--outdir", str(out)]) == 1
+    changed = write_scene(make_scene(material={"E": "20 MPa"}), name="b.toml")
+    assert main(["plan", str(changed), "--outdir", str(out)]) == 1
     assert "material.E: 10 MPa -> 20 MPa" in capsys.readouterr().out
 
 
@@ -67,3 +69,16 @@ def test_scenes_lists_descriptions(capsys):
     for name, description in scenes.builtin_descriptions().items():
         assert f"{name:16s} {description}" in out
     assert "site-packages" not in out.split("(scene files in")[0]
+
+
+def test_every_option_of_every_command_has_help_text():
+    """`roughcontact plot --help` listed --quiet without a word on it (issue 26)."""
+    import argparse
+
+    from roughcontact.cli import _parser
+
+    commands = next(a for a in _parser()._actions if isinstance(a, argparse._SubParsersAction))
+    for name, sub in commands.choices.items():
+        for action in sub._actions:
+            if action.option_strings and not isinstance(action, argparse._HelpAction):
+                assert action.help, f"{name} {action.option_strings[0]} has no help text"
