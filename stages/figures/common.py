@@ -30,7 +30,7 @@ OTHER_STYLE = dict(color="C1", marker="D", linestyle="-")
 #: sweeps of more coherences than this are summarised by a colour map and the seed's cases
 MAX_CURVES = 5
 #: what the thin lines around a shaded band are (titles say it)
-EDGES = "edged in its curve's colour"
+EDGES = "edged in its colour"
 #: probability content of the shaded bands when the scene computes no bands stage
 DEFAULT_LEVEL = 0.9
 
