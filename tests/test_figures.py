@@ -298,7 +298,8 @@ def test_variants_at_another_reference_wavenumber_are_named(tmp_path):
     data.write_text("# q [1/m]  C [m^4]\n" + "\n".join(f"{x:.6e} {1e-38 * (x / 1e8) ** -3.6:.6e}" for x in q))
     raw = make_scene(solid={"kind": "psd_file", "path": str(data), "extend": "power_law"},
                      interface={"eta": 0.0}, outputs={"variables": ["contact_area_ratio", "mean_separation"]},
-                     variants={"substrate_only": {"solid": {"kind": "smooth"}}})
+                     variants={"substrate_only": {"solid": {"kind": "smooth"}},
+                               "stiffer": {"material": {"E": "100 GPa"}}})
     sc = scenes.from_dict(raw)
     results = engine.run(sc, tmp_path / "out", report=engine.Reporter(None))
     assert float(results["base"]["contact"]["qL"]) == pytest.approx(1e8)
@@ -309,4 +310,8 @@ def test_variants_at_another_reference_wavenumber_are_named(tmp_path):
             titles = _titles(fig)
             assert "zeta = 4 (q up to 4e8 1/m, qL = 1e8 1/m)" in titles, titles
             assert "substrate only: other qL, zeta = 4 (q up to 8e8 1/m, qL = 2e8 1/m)" in titles, titles
+            assert "stiffer: other qL" not in titles  # its qL is the base's
+            # every variant is drawn (container's `uncorrelated` was left out of Figs 3 and 5)
+            labels = [line.get_label() for line in fig.axes[0].get_lines()]
+            assert {"substrate only", "eta = 0", "stiffer: eta = 0"} <= set(labels), labels
             plt.close(fig)
