@@ -2,7 +2,8 @@
 
 Each rung of the resolution ladder is a point (median time of its runs: timings are noisy, so
 points are not joined into a line that would zig-zag); each preset is a large open marker; the
-dotted line of a stage's colour is the target of its default preset. The axes span whole
+dotted line of a stage's colour is the target of its default preset (stages with the same target
+share one line of alternating dashes in their colours). The axes span whole
 decades, so that only decade ticks are labelled and labels never overlap.
 """
 
@@ -23,6 +24,15 @@ def _decades(values) -> tuple[float, float]:
         return 0.1, 10.0
     lo, hi = np.floor(np.log10(values.min())), np.ceil(np.log10(values.max()))
     return 10.0 ** lo, 10.0 ** max(hi, lo + 1)
+
+
+def _target_dashes(tolerances, i: int, dash: float = 3.0):
+    """The line style of stage ``i``'s target line: dotted-like short dashes; when several stages
+    share the target, their lines coincide, so each draws every n-th dash (offset by its rank) and
+    the shared line shows every stage's colour in turn instead of the last one's only."""
+    same = [k for k, t in enumerate(tolerances) if np.isclose(t, tolerances[i], rtol=1e-9)]
+    n, rank = len(same), same.index(i)
+    return (rank * dash, (dash, dash * (n - 1))) if n > 1 else (0, (1.0, 2.0))
 
 
 def figure(ds: xr.Dataset):
@@ -46,11 +56,11 @@ def figure(ds: xr.Dataset):
                       markeredgewidth=1.5)
             times.append(pt)
             errors.append(pe)
-        ax.axhline(float(ds["tolerance"][i]), color=colour, linestyle=":", linewidth=1.0,
-                   label=f"{name}: target of the default")
+        ax.axhline(float(ds["tolerance"][i]), color=colour, linestyle=_target_dashes(ds["tolerance"].values, i),
+                   linewidth=1.2, label=f"{name}: target of the default")
         times += list(t[ok])
         errors += list(np.maximum(e[ok], SMALLEST))
-        errors.append(0.3 * float(ds["tolerance"][i]))  # the target line inside the axes, not on an edge
+        errors += [0.3 * float(ds["tolerance"][i]), 3.0 * float(ds["tolerance"][i])]  # the target inside, off the edges
     for preset, marker in PRESET_MARKERS.items():
         ax.plot([], [], marker, color="0.3", markersize=9, markerfacecolor="none", label=f"preset {preset}")
     ax.set_xlim(*_decades(times))

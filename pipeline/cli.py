@@ -46,7 +46,7 @@ def _parser() -> argparse.ArgumentParser:
         p.add_argument("--verify", action="store_true", default=None,
                        help="check the checksum of every reused result (default: of results up to 64 MiB)")
     plot = scene_command("plot", "draw the figures of the scene's stages as PNG (computing what is missing)")
-    plot.add_argument("--quiet", action="store_true")
+    plot.add_argument("--quiet", action="store_true", help="no progress bars: one line per stage and per figure")
     plot.add_argument("--scheduler", help="as for run")
     scene_command("accuracy", "measure each stage's error and cost on a ladder of resolutions; NetCDF table + PNG")
     show = sub.add_parser("show", help="what is in a result file and where it came from")
@@ -161,31 +161,35 @@ def scene_figures(sc) -> tuple[list, list]:
 
 
 def _plot(sc, outdir: Path, reporter, scheduler=None) -> int:
+    """Draw the scene's figures. A figure that needs an optional output the scene does not ask
+    for, or that has nothing to show for this scene (a comparison without the variant it
+    compares with), is not drawn and not announced as a problem: one closing line names them."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    figures, skipped = scene_figures(sc)
-    for f in skipped:
-        print(f"{f.title}: skipped (add {', '.join(sorted(set(f.outputs) - set(sc.outputs)))} to outputs.variables)")
+    figures, _ = scene_figures(sc)
     if not figures:
         raise UserError("none of the scene's stages draws a figure", key="outputs.variables")
     results = engine.run(sc, outdir, report=reporter, scheduler=scheduler)
     folder = outdir / "figures"
     folder.mkdir(parents=True, exist_ok=True)
+    empty = []
     for f in figures:
         fig = f.make(results)
         target = folder / f"{f.name}.png"
         if fig is None:  # nothing to draw for this scene (e.g. no paired maps): no blank figure
             target.unlink(missing_ok=True)
-            print(f"{f.title}: nothing to draw for this scene (no figure written)")
+            empty.append(f.name)
             continue
         try:
             store.write_figure(fig, target)
         finally:
             plt.close(fig)
         print(f"{f.title}: {target}")
+    if empty:
+        print(f"not drawn, nothing to show for this scene: {', '.join(empty)}")
     return 0
 
 

@@ -112,3 +112,16 @@ def test_readme_agrees_with_the_scenes_and_the_accuracy_page():
     area_low, area_high, gap_low, gap_high = row.group(1).split(" | ")
     assert (f"the error is {area_low} in A/A0 and {gap_low} in the mean separation u where zeta < 8, {area_high} "
             f"and {gap_high} from zeta = 16 up") in readme
+
+
+def test_every_option_of_every_command_has_help_text():
+    """`roughcontact plot --help` listed --quiet without a word on it (issue 26)."""
+    import argparse
+
+    from roughcontact.cli import _parser
+
+    commands = next(a for a in _parser()._actions if isinstance(a, argparse._SubParsersAction))
+    for name, sub in commands.choices.items():
+        for action in sub._actions:
+            if action.option_strings and not isinstance(action, argparse._HelpAction):
+                assert action.help, f"{name} {action.option_strings[0]} has no help text"

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .common import case_of, eta_label, legend_outside, q_reference, style, zeta_text
+from .common import EDGES, case_of, eta_label, legend_outside, scope_text, shade, style
 
 
 def _label(variant: str, eta, res) -> tuple[str, str]:
@@ -21,7 +21,7 @@ def _where(results, zeta) -> str:
         return ""
     top = float(psd["q"].values[-1] / psd["q"].values[0]) if psd is not None else None
     where = "the whole measured band, " if top and abs(zeta / top - 1) < 1e-6 else ""
-    return f"{where}{zeta_text(zeta, q_reference(results))}"
+    return f"{where}{scope_text(results, zeta)}"
 
 
 def _reduce(da, keep):
@@ -67,11 +67,11 @@ def _figure(results, stage, var, xdim, xlabel, ylabel, title, scale=1.0, logy=Fa
         s = style(case)
         line, = ax.plot(x, y * scale, color=s["color"], linestyle=s["linestyle"], lw=1.5, marker=s["marker"],
                         markevery=max(1, x.size // 12), markersize=4, label=label)
-        ax.fill_between(x, lo * scale, hi * scale, color=line.get_color(), alpha=0.25, lw=0)
+        shade(ax, x, lo * scale, hi * scale, line.get_color())
         with np.errstate(divide="ignore", invalid="ignore"):
             ok = y > 0
-            rel.fill_between(x[ok], 100 * (lo[ok] / y[ok] - 1), 100 * (hi[ok] / y[ok] - 1), color=line.get_color(),
-                             alpha=0.35, lw=0)
+            shade(rel, x[ok], 100 * (lo[ok] / y[ok] - 1), 100 * (hi[ok] / y[ok] - 1), line.get_color(), alpha=0.08,
+                  edge=1.3)
         notes.update(extra)
     for res in results.values():
         if "bands" in res:
@@ -86,7 +86,7 @@ def _figure(results, stage, var, xdim, xlabel, ylabel, title, scale=1.0, logy=Fa
     rel.set_xlabel(xlabel)
     rel.set_ylabel("band / curve - 1 (%)")
     ax.set_ylabel(ylabel)
-    sub = f"shaded: {float(level):.0%} band over {n} spectrum draws" if level is not None else ""
+    sub = f"shaded: {float(level):.0%} band over {n} spectrum draws, {EDGES}" if level else ""
     sub += f"\n{_where(results, zeta)}" if zeta is not None else ""
     sub += f"\n({', '.join(sorted(notes))})" if notes else ""
     ax.set_title(f"{title}\n{sub}", fontsize=9.5)
@@ -125,15 +125,15 @@ def figure_band_stress(results):
         sigma = d["sigma"].values / 1e6
         line, = ax.plot(sigma, d.values * 1e6, lw=1.4,
                         label=f"p = {float(d['p']) / 1e6:.3g} MPa (A/A0 = {float(area[i]):.2f})")
-        ax.fill_between(sigma, b.isel(quantile=0).values * 1e6, b.isel(quantile=-1).values * 1e6,
-                        color=line.get_color(), alpha=0.25, lw=0)
+        shade(ax, sigma, b.isel(quantile=0).values * 1e6, b.isel(quantile=-1).values * 1e6, line.get_color())
     ax.set_xlim(left=0)
     ax.set_ylim(bottom=0)
     ax.set_xlabel("local stress sigma (MPa)")
     ax.set_ylabel("P(sigma) (1/MPa)")
     level, n = bands.attrs.get("level", 0.9), bands.attrs.get("draws")
     ax.set_title(f"Stress distribution with its uncertainty band\nshaded: {float(level):.0%} band over {n} spectrum "
-                 f"draws\n{_where(results, zeta)}" + (f"\n({', '.join(notes)})" if notes else ""), fontsize=9.5)
+                 f"draws, {EDGES}\n{_where(results, zeta)}" + (f"\n({', '.join(notes)})" if notes else ""),
+                 fontsize=9.5)
     ax.grid(alpha=0.3)
     return legend_outside(fig)
 
@@ -158,7 +158,7 @@ def figure_band_psd(results):
         s = style(case)
         line, = ax.loglog(q[ok], C[ok], color=s["color"], linestyle=s["linestyle"], lw=1.2,
                           label=f"combined C(q), {label}")
-        ax.fill_between(q[ok], lo[ok], hi[ok], color=line.get_color(), alpha=0.25, lw=0)
+        shade(ax, q[ok], lo[ok], hi[ok], line.get_color())
     topo = results["base"].get("topography")
     for name, colour in (("substrate", "0.35"), ("solid", "0.65")):
         if topo is not None and f"psd_{name}_measured" in topo:
@@ -167,6 +167,7 @@ def figure_band_psd(results):
     level = results["base"]["bands"].attrs.get("level", 0.9) if "bands" in results["base"] else 0.9
     ax.set_xlabel("wavenumber q (1/m)")
     ax.set_ylabel("C(q) (m$^4$, Persson convention)")
-    ax.set_title(f"Combined PSD of the pair\nshaded: {float(level):.0%} band of the spectrum draws", fontsize=10)
+    ax.set_title(f"Combined PSD of the pair\nshaded: {float(level):.0%} band of the spectrum draws, {EDGES}",
+                 fontsize=10)
     ax.grid(True, alpha=0.3)
     return legend_outside(fig)

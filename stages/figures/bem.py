@@ -32,7 +32,7 @@ def _prepared(results):
     return ds, measured
 
 
-def _legend(fig, cases, variants, bem=True):
+def _legend(fig, cases, variants, bem=True, spread=True):
     """One legend below the panels: a colour and marker per case, a line style per theory variant."""
     from matplotlib.lines import Line2D
 
@@ -41,7 +41,7 @@ def _legend(fig, cases, variants, bem=True):
                 for v in variants]
     if bem:
         handles.append(Line2D([], [], color="0.2", marker="o", linestyle="none", markerfacecolor="white",
-                              label="BEM (+- 1 s.d. over realizations)"))
+                              label="BEM (+- 1 s.d. over realizations)" if spread else "BEM (one pair: no spread)"))
     fig.legend(handles=handles, loc="outside lower center", fontsize=8, ncol=min(len(handles), 4))
 
 
@@ -67,8 +67,9 @@ def _decorate(fig, axes, ds, measured, zeta_bem, grid, qL):
     axes[0].set_title("contact area: theory (lines), BEM (open markers)", fontsize=9)
     axes[1].set_ylabel("mean separation u (nm)")
     axes[1].set_ylim(bottom=0)
-    axes[1].set_title("mean separation" + (" (one measured pair)" if measured else
-                                           " (error bars: spread over realizations)"), fontsize=9)
+    one = " (one measured pair)" if measured else " (one realization)"
+    axes[1].set_title("mean separation" + (" (error bars: spread over realizations)"
+                                           if ds.sizes.get("realization", 1) > 1 else one), fontsize=9)
     for ax, what in ((axes[2], "A/A0"), (axes[3], "u")):
         ax.axhline(1.0, color="0.5", linewidth=0.8)
         ax.set_ylabel(f"{what}: theory / BEM")
@@ -111,7 +112,7 @@ def figure_bem_comparison(results):
         axes[1].errorbar(x, d["bem_mean_gap_mean"] * 1e9, yerr=d["bem_mean_gap_std"] * 1e9, fmt=s["marker"],
                          color=s["color"], markerfacecolor="white", markersize=5, capsize=2)
     _decorate(fig, axes, ds, measured, zeta_bem, grid, qL)
-    _legend(fig, cases, variants)
+    _legend(fig, cases, variants, spread=ds.sizes.get("realization", 1) > 1)
     return fig
 
 

@@ -10,6 +10,7 @@ curve.
 
 from __future__ import annotations
 
+import json
 from typing import NamedTuple
 
 import numpy as np
@@ -28,6 +29,8 @@ CASE_STYLES = {
 OTHER_STYLE = dict(color="C1", marker="D", linestyle="-")
 #: sweeps of more coherences than this are summarised by a colour map and the seed's cases
 MAX_CURVES = 5
+#: what the thin lines around a shaded band are (titles say it)
+EDGES = "edged in its colour"
 #: probability content of the shaded bands when the scene computes no bands stage
 DEFAULT_LEVEL = 0.9
 
@@ -51,9 +54,10 @@ def style(label: str) -> dict:
     return dict(CASE_STYLES.get(label, OTHER_STYLE))
 
 
-def line_style(label: str, npoints: int, markers: int = 12) -> dict:
-    """Keyword arguments of ``Axes.plot`` for a case: its style, markers on about ``markers`` points."""
-    out = style(label)
+def line_style(case: "str | Case", npoints: int, markers: int = 12) -> dict:
+    """Keyword arguments of ``Axes.plot`` for a case (its label or a :class:`Case`): its style,
+    markers on about ``markers`` points."""
+    out = style(case) if isinstance(case, str) else dict(case.style)
     out.update(markevery=max(1, npoints // markers), markersize=4)
     return out
 
@@ -61,26 +65,45 @@ def line_style(label: str, npoints: int, markers: int = 12) -> dict:
 def curve_cases(results, stage: str) -> list[Case]:
     """The curves of a seed-style comparison figure: the ``substrate_only`` variant if the scene
     has it, then one per coherence of the base scene (the seed's eta = -1, 0, +1 alone, or the
-    nearest values, when it sweeps more than :data:`MAX_CURVES`), or one for the pair."""
+    nearest values, when it sweeps more than :data:`MAX_CURVES`), or one for the pair, then the
+    same for every other variant with this stage (labelled 'variant name: case', open markers)."""
     out = []
     if "substrate_only" in results and stage in results["substrate_only"]:
         out.append(Case("substrate only", results["substrate_only"][stage], style("substrate only")))
-    base = results["base"][stage]
-    if "eta" in base.dims:
-        for e in selected_etas(base["eta"].values):
-            out.append(Case(eta_label(e), base.sel(eta=e), style(eta_label(e))))
+    out += _variant_cases(results["base"], stage, "")
+    for variant, res in results.items():
+        if variant not in ("base", "substrate_only") and stage in res:
+            out += _variant_cases(res, stage, variant.replace("_", " ") + ": ")
+    return out
+
+
+def _variant_cases(res, stage: str, prefix: str) -> list[Case]:
+    """The cases of one variant's result (see :func:`curve_cases`); a variant other than the base
+    keeps its case's colour and marker, drawn open."""
+    ds = res[stage]
+    if "eta" in ds.dims:
+        cases = [(eta_label(e), ds.sel(eta=e)) for e in selected_etas(ds["eta"].values)]
     else:
-        label = case_of(results["base"])
-        out.append(Case(label, base, style(label)))
+        cases = [(case_of(res), ds)]
+    out = []
+    for case, d in cases:
+        s = style(case)
+        if prefix:
+            s["markerfacecolor"] = "white"
+        out.append(Case(prefix + case, d, s))
     return out
 
 
 def case_of(res) -> str:
     """The case of a variant's results without an eta dimension: 'pair, measured eta(q)', the
-    one constant coherence ('eta = 0'), or 'pair'."""
+    one constant coherence ('eta = 0'), 'substrate only' (or 'solid only') when one surface
+    alone is rough, or 'pair'."""
     attrs = res["psd"]["psd_combined"].attrs if "psd" in res else {}
     if attrs.get("coherence") == "measured":
         return "pair, measured eta(q)"
+    if attrs.get("coherence") == "none":  # one rough surface: the seed's 'substrate only' case
+        rough = list(json.loads(res["psd"].attrs.get("surface_bands", "{}")))
+        return f"{rough[0]} only" if len(rough) == 1 else "pair"
     return eta_label(attrs["eta"]) if attrs.get("coherence") == "constant" and "eta" in attrs else "pair"
 
 
@@ -131,6 +154,20 @@ def zeta_text(zeta: float | None, qL: float | None) -> str:
     if qL is None:
         return f"zeta = {zeta:.4g}"
     return f"zeta = {zeta:.4g} (q up to {wavenumber(zeta * qL)}, qL = {wavenumber(qL)})"
+
+
+def scope_text(results, zeta: float | None) -> str:
+    """:func:`zeta_text` of the base scene, and of every variant whose q grid starts elsewhere (its
+    own surfaces set its qL, e.g. a substrate_only variant whose substrate starts above the
+    solid): 'zeta = 4 (q up to 4e8 1/m, qL = 1e8 1/m); substrate only: other qL, zeta = 4 (q up
+    to 8e8 1/m, qL = 2e8 1/m)'. The same zeta then reaches different wavenumbers: the figure says so."""
+    qL = q_reference(results)
+    text = zeta_text(zeta, qL)
+    for variant in results:
+        other = q_reference(results, variant) if variant != "base" else None
+        if other and qL and not np.isclose(other, qL, rtol=1e-9):
+            text += f";\n{variant.replace('_', ' ')}: other qL, {zeta_text(zeta, other)}"
+    return text
 
 
 def reduce_dims(ds, keep: tuple[str, ...], var: str | None = None):
@@ -206,13 +243,22 @@ def line_with_band(ax, x, da, level: float, *, across=False, **style):
     line, = ax.plot(y, x, **style) if across else ax.plot(x, y, **style)
     band = draw_band(da, level)
     if band is not None:
-        fill = ax.fill_betweenx if across else ax.fill_between
-        fill(x, band[0], band[1], color=line.get_color(), alpha=0.22, lw=0)
+        shade(ax, x, band[0], band[1], line.get_color(), across=across)
     return line
+
+
+def shade(ax, x, lo, hi, color, across=False, alpha=0.18, edge=0.6):
+    """A band from ``lo`` to ``hi`` over ``x``: a light fill in ``color`` edged by thin lines of
+    the same colour, so that where two bands overlap (their fills mix into a third shade) each
+    band's edges still say whose it is. ``across``: the band spans the horizontal axis."""
+    fill = ax.fill_betweenx if across else ax.fill_between
+    fill(x, lo, hi, color=color, alpha=alpha, lw=0)
+    for limit in (lo, hi):
+        ax.plot(*((limit, x) if across else (x, limit)), color=color, lw=edge, alpha=0.8, label="_band edge")
 
 
 def band_note(results, ds) -> str:
     """A legend/title note on the shaded bands ('' without draws)."""
     if "draw" not in ds.dims:
         return ""
-    return f"shaded: {band_level(results):.0%} band over {ds.sizes['draw'] - 1} spectrum draws"
+    return f"shaded: {band_level(results):.0%} band over {ds.sizes['draw'] - 1} spectrum draws, {EDGES}"

@@ -18,10 +18,10 @@ from .common import (
     line_with_band,
     nominal,
     pick_zeta,
-    q_reference,
     reduce_dims,
+    scope_text,
     selected_etas,
-    zeta_text,
+    shade,
 )
 
 
@@ -54,7 +54,7 @@ def figure_contact_area(results):
         ds, note = reduce_dims(at_zeta(case.ds, zeta), ("p",), "contact_area_ratio")
         notes |= {note, band_note(results, ds)}
         p = np.atleast_1d(ds["p"].values) / float(nominal(ds["E_star"]))
-        line_with_band(ax, p, ds["contact_area_ratio"], level, label=case.label, **line_style(case.label, p.size))
+        line_with_band(ax, p, ds["contact_area_ratio"], level, label=case.label, **line_style(case, p.size))
     ax.set_xlabel("p / E*")
     ax.set_ylabel("A / A0")
     ax.set_ylim(0, 1.02)
@@ -64,7 +64,7 @@ def figure_contact_area(results):
                     float(nominal(base["E_star"])))
         ax.set_title("the seed's cases (nearest coherences)", fontsize=9)
     extra = "; ".join(sorted(n for n in notes if n))
-    title = (f"Relative contact area (seed Fig. 3) at\n{zeta_text(zeta, q_reference(results))}"
+    title = (f"Relative contact area (seed Fig. 3) at\n{scope_text(results, zeta)}"
              + (f"\n{extra}" if extra else ""))
     if many:
         fig.suptitle(title, fontsize=10)
@@ -107,7 +107,7 @@ def figure_stress_distribution(results):
                 right = max(right, (p + 5.0 * np.sqrt(G)) / E_star)
                 if "draw" in draws.dims:
                     lo, hi = band_on(d["sigma"].values, draws["sigma"].values, draws.values, level)
-                    ax.fill_between(sigma, lo * E_star, hi * E_star, color=kw["color"], alpha=0.22, lw=0)
+                    shade(ax, sigma, lo * E_star, hi * E_star, kw["color"])
             else:
                 ax.axvline(p / E_star, label=f"{case.label} (full contact: a delta at p)", **kw)
         ax.set_xlim(0, right or 2 * p / E_star)
@@ -116,6 +116,6 @@ def figure_stress_distribution(results):
         ax.grid(alpha=0.3)
     axes[0][0].set_ylabel("P(sigma) E*")
     note = band_note(results, base)
-    fig.suptitle(f"Stress distribution (seed Fig. 4) at {zeta_text(zeta, q_reference(results))}"
+    fig.suptitle(f"Stress distribution (seed Fig. 4) at {scope_text(results, zeta)}"
                  + (f"\n{note}" if note else ""), fontsize=10)
     return legend_outside(fig, list(axes[0]), below=True)

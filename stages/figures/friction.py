@@ -82,11 +82,17 @@ def _friction_figure(results, which, etas, title, ylabel, logy=False):
 
 
 def figure_mu_substrate(results):
+    """Seed Fig. 8; None (no figure) without a substrate_only variant to compare with."""
+    if "friction" not in results.get("substrate_only", {}):
+        return None
     return _friction_figure(results, "friction_coefficient", None,
                             "Friction: substrate only vs both rough (seed Fig. 8)", "friction coefficient mu")
 
 
 def figure_area_substrate(results):
+    """Seed Fig. 9; None (no figure) without a substrate_only variant to compare with."""
+    if "friction" not in results.get("substrate_only", {}):
+        return None
     return _friction_figure(results, "sliding_contact_area_ratio", None,
                             "Contact area while sliding (seed Fig. 9)", "A / A0", logy=True)
 

@@ -15,15 +15,14 @@ from .common import (
     line_with_band,
     nominal,
     pick_zeta,
-    q_reference,
     reduce_dims,
-    zeta_text,
+    scope_text,
 )
 
 
 def figure_separation(results):
     """log10(p/E*) against u (seed Fig. 5), one curve per case, with the small-pressure law
-    u = u0 ln(beta E*/p) (eqs 58-60) as thin dashed lines of the same colour."""
+    u = u0 ln(beta E*/p) (eqs 58-60) as a black dotted line beside each case's curve, drawn over it."""
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(7.6, 4.6), layout="constrained")
@@ -37,18 +36,19 @@ def figure_separation(results):
         p = np.atleast_1d(ds["p"].values) / float(ds["E_star"])
         label = case.label + (" (u = 0: no combined roughness)" if np.all(u == 0) else "")
         line_with_band(ax, np.log10(p), draws["mean_separation"] * 1e9, level, across=True, label=label,
-                       **line_style(case.label, u.size))
+                       **line_style(case, u.size))
         u0, beta = float(ds["separation_u0"]), float(ds["separation_beta"])
         if u0 > 0 and np.isfinite(beta):
             law = u0 * np.log(beta / p)
             keep = law > 0
-            ax.plot(law[keep] * 1e9, np.log10(p[keep]), "--", color=case.style["color"], linewidth=0.7, alpha=0.7,
-                    label="u0 ln(beta E*/p) (eqs 58-60)" if i == 0 else None)
+            # on top of the curves, in a style no case has: it would hide under a dashed (substrate-only) curve
+            ax.plot(law[keep] * 1e9, np.log10(p[keep]), color="k", linestyle=(0, (1.5, 2.5)), linewidth=1.0,
+                    zorder=3, label="u0 ln(beta E*/p), eqs 58-60" if i == 0 else None)
     ax.set_xlabel("mean separation u (nm)")
     ax.set_ylabel("log10(p / E*)")
     ax.set_xlim(left=-0.03 * ax.get_xlim()[1])
     ax.grid(alpha=0.3)
     extra = "; ".join(sorted(n for n in notes if n))
-    ax.set_title(f"Interfacial separation (seed Fig. 5) at\n{zeta_text(zeta, q_reference(results))}"
+    ax.set_title(f"Interfacial separation (seed Fig. 5) at\n{scope_text(results, zeta)}"
                  + (f"\n{extra}" if extra else ""), fontsize=10)
     return legend_outside(fig)
