@@ -117,10 +117,11 @@ def _one_per_block(da: xr.DataArray) -> xr.DataArray:
 def describe_validation_bem(inp: StageInput) -> Shape:
     """Working memory per load of a task: the solver's fields, about 200 bytes (25 values) per
     pixel of the largest map (docs/bem.md: ~150 measured), shared by the task's loads, which one
-    task solves together (never chunked)."""
+    task solves together (never chunked). Each task (a block) is long work: the engine keeps it
+    once finished, so that a killed run resumes (``keep_blocks``)."""
     loads = max(np.size(inp["validation.reduced_pressure"]), 1)
     return Shape(work={"values_per_pixel": 25, "pixels": int(inp["validation.max_grid"]) ** 2, "per_load": 1 / loads},
-                 coupled=("reduced_pressure",))
+                 coupled=("reduced_pressure",), keep_blocks=True)
 
 
 _DIMS = "(hurst, bandwidth, eta, realization, pixels_per_wavelength, reduced_pressure)"
