@@ -141,8 +141,9 @@ class KeptBlocks:
     computing them. The folder is the result's (:func:`roughcontact.store.kept_blocks_folder`),
     its name holds the key; the store removes it once the result is written."""
 
-    def __init__(self, folder: Path):
+    def __init__(self, folder: Path, tmp_prefix: str = ".tmp-"):
         self.folder = Path(folder)
+        self.tmp_prefix = tmp_prefix  # the store's: its clean-up removes what a kill leaves
 
     def _file(self, dims, region) -> Path:
         where = "_".join(f"{s.start}-{s.stop}" for s in region)
@@ -163,10 +164,8 @@ class KeptBlocks:
 
     def save(self, dims, names, region, values) -> None:
         """Keep a block: a temporary in the folder, then a rename (a kill leaves no half block)."""
-        from .store import TMP_PREFIX
-
         self.folder.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=TMP_PREFIX, suffix=".npz", dir=self.folder)
+        fd, tmp = tempfile.mkstemp(prefix=self.tmp_prefix, suffix=".npz", dir=self.folder)
         try:
             with os.fdopen(fd, "wb") as fh:
                 np.savez(fh, **{name: np.asarray(v) for name, v in zip(names, values, strict=True)})

@@ -187,7 +187,7 @@ def write(ds: xr.Dataset, path: Path, compute_with="threads", progress=None, com
 
     path = Path(path)
     key = ds.attrs.get("stage_key")
-    keep = KeptBlocks(kept_blocks_folder(path, key)) if keep_blocks and key else None
+    keep = KeptBlocks(kept_blocks_folder(path, key), TMP_PREFIX) if keep_blocks and key else None
     _forget_blocks(path, keep.folder if keep is not None else None)
     if keep is not None:
         clean_temporaries(keep.folder)  # a block being saved when a run was killed
