@@ -8,6 +8,11 @@
   blocks are computed by the scheduler (on a cluster's workers, say) and written by *this*
   process only, a bounded number in flight, so a sweep never has to fit in memory and no worker
   ever writes to the file.
+* :class:`KeptBlocks`: for a stage whose blocks are long work (``Shape(keep_blocks=True)``, the
+  validation's BEM tasks), every finished block is also saved in the output folder under the
+  result's content key, as it arrives, so that a run that is killed resumes where it stopped.
+* :func:`quiet_libraries`: dask's warnings about chunks and graphs (the engine's choices, nothing
+  the user can act on) kept out of the user's output.
 """
 
 from __future__ import annotations
@@ -16,6 +21,9 @@ import contextlib
 import itertools
 import math
 import os
+import tempfile
+import warnings
+from pathlib import Path
 from typing import Iterator, Mapping
 
 import numpy as np
@@ -114,6 +122,111 @@ def _check_workers(client, address: str) -> None:
                         key="run.scheduler")
 
 
+@contextlib.contextmanager
+def quiet_libraries() -> Iterator[None]:
+    """Hide the warnings dask and dask.distributed give about how the work is cut up (a
+    ``PerformanceWarning`` "Increasing number of chunks", "Sending large graph"): the engine
+    chooses the chunks, so they say nothing the user can act on. Warnings of the physics
+    (numpy's, the stages' own :class:`SceneWarning`) still show."""
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", module=r"(dask|distributed)(\..*)?$")
+        warnings.filterwarnings("ignore", message=r"(Increasing number of chunks|Sending large graph)")
+        yield
+
+
+class KeptBlocks:
+    """The finished blocks of one result being written, kept in ``folder`` (one ``.npz`` per
+    block, named by the block's dimensions and index ranges, written atomically) so that a run
+    that is killed resumes: the next run with the same content key reads them instead of
+    computing them. The folder is the result's (:func:`roughcontact.store.kept_blocks_folder`),
+    its name holds the key; the store removes it once the result is written."""
+
+    def __init__(self, folder: Path, tmp_prefix: str = ".tmp-"):
+        self.folder = Path(folder)
+        self.tmp_prefix = tmp_prefix  # the store's: its clean-up removes what a kill leaves
+
+    def _file(self, dims, region) -> Path:
+        where = "_".join(f"{s.start}-{s.stop}" for s in region)
+        return self.folder / f"{'.'.join(dims) or 'scalar'}@{where or '0'}.npz"
+
+    def load(self, dims, names, region) -> list[np.ndarray] | None:
+        """The block's values per variable of ``names``, or None if not kept (or unreadable)."""
+        path = self._file(dims, region)
+        if not path.is_file():
+            return None
+        shape = tuple(s.stop - s.start for s in region)
+        try:
+            with np.load(path, allow_pickle=False) as kept:
+                values = [kept[name] for name in names]
+        except (OSError, KeyError, ValueError, EOFError):
+            return None
+        return values if all(v.shape == shape for v in values) else None
+
+    def save(self, dims, names, region, values) -> None:
+        """Keep a block: a temporary in the folder, then a rename (a kill leaves no half block)."""
+        self.folder.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=self.tmp_prefix, suffix=".npz", dir=self.folder)
+        try:
+            with os.fdopen(fd, "wb") as fh:
+                np.savez(fh, **{name: np.asarray(v) for name, v in zip(names, values, strict=True)})
+            os.replace(tmp, self._file(dims, region))
+        except BaseException:
+            Path(tmp).unlink(missing_ok=True)
+            raise
+
+
+def _together(*values):
+    return values
+
+
+def _as_completed(tasks: Mapping[tuple, list], compute_with, client, pool, workers: int):
+    """Yield ``(idx, values)`` as each block of ``tasks`` (block index -> its dask arrays) finishes,
+    computing every block on its own (its own graph): a few at a time, on the scene's scheduler."""
+    import dask
+
+    todo = iter(tasks.items())
+    if client is not None:
+        from distributed import as_completed
+
+        window = as_completed(loop=client.loop)
+        owner = {}
+        for idx, task in itertools.islice(todo, 2 * workers):
+            future = client.compute(dask.delayed(_together)(*task))
+            owner[future.key] = idx
+            window.add(future)
+        for future in window:
+            yield owner.pop(future.key), future.result()
+            for idx, task in itertools.islice(todo, 1):
+                nxt = client.compute(dask.delayed(_together)(*task))
+                owner[nxt.key] = idx
+                window.add(nxt)
+        return
+    if compute_with in ("synchronous", "sync") or workers <= 1:
+        for idx, task in todo:
+            yield idx, dask.compute(*task, scheduler="synchronous")
+        return
+    from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
+
+    if pool is not None:
+        def one(task):
+            return dask.compute(*task, scheduler="processes", pool=pool)
+    else:  # threads: each block computed whole by one thread, several blocks at a time
+        def one(task):
+            return dask.compute(*task, scheduler="synchronous")
+    executor = ThreadPoolExecutor(workers, thread_name_prefix="roughcontact-block")
+    try:
+        running = {executor.submit(one, task): idx for idx, task in itertools.islice(todo, workers)}
+        while running:
+            done, _ = wait(running, return_when=FIRST_COMPLETED)
+            for future in done:
+                idx = running.pop(future)
+                yield idx, future.result()
+                for nidx, task in itertools.islice(todo, 1):
+                    running[executor.submit(one, task)] = nidx
+    finally:  # interrupted: start nothing more (blocks already running finish on their own)
+        executor.shutdown(wait=False, cancel_futures=True)
+
+
 def dask_variables(ds: xr.Dataset) -> list[str]:
     return [name for name, v in ds.variables.items() if v.chunks is not None]
 
@@ -123,55 +236,91 @@ def _region(offsets, idx) -> tuple[slice, ...]:
     return tuple(slice(int(o[i]), int(o[i + 1])) for o, i in zip(offsets, idx, strict=True))
 
 
+def _in_batches(indices, arrays, compute_with, client, pool, in_flight: int):
+    """Yield ``(idx, values)`` for every block, ``in_flight`` blocks computed together (work they
+    share is done once)."""
+    import dask
+
+    todo = iter(indices)
+    while batch := list(itertools.islice(todo, in_flight)):
+        tasks = [[a.blocks[idx] for a in arrays] for idx in batch]
+        if client is not None:
+            results = client.gather(client.compute(tasks))
+        elif pool is not None:
+            results = dask.compute(*tasks, scheduler="processes", pool=pool)
+        else:
+            results = dask.compute(*tasks, scheduler=compute_with)
+        yield from zip(batch, results, strict=True)
+
+
+def _groups(ds: xr.Dataset, names: list[str], keep: KeptBlocks | None) -> list[tuple]:
+    """Per group of variables with the same dimensions and chunks: (dims, names, chunk offsets,
+    block indices, {index: values} of the blocks ``keep`` holds)."""
+    groups: dict[tuple, list[str]] = {}
+    for name in names:
+        var = ds[name].variable
+        groups.setdefault((var.dims, var.chunks), []).append(name)
+    out = []
+    for (dims, chunks), group in groups.items():
+        offsets = [np.concatenate([[0], np.cumsum(c)]) for c in chunks]
+        indices = list(itertools.product(*(range(len(c)) for c in chunks)))
+        kept = {}
+        for idx in indices if keep is not None else ():
+            values = keep.load(dims, group, _region(offsets, idx))
+            if values is not None:
+                kept[idx] = values
+        out.append((dims, group, offsets, indices, kept))
+    return out
+
+
 def write_blocks(path, ds: xr.Dataset, names: list[str], compute_with, progress=None,
-                 in_flight: int | None = None, checksums=None) -> None:
+                 in_flight: int | None = None, checksums=None, keep: KeptBlocks | None = None) -> None:
     """Compute the dask variables ``names`` of ``ds`` block by block and write them into the
     existing NetCDF file ``path`` (whose other variables are already written); ``progress`` (a
     :class:`roughcontact.progress.Reporter`) shows the blocks written.
 
     Variables with the same dimensions and chunks are computed together, so that work they share
     (an integral over q, say) is done once per block.
+
+    With ``keep`` (:class:`KeptBlocks`), the blocks it holds are written without computing them,
+    and every other block is computed on its own and kept as soon as it finishes (then written),
+    so that a run killed at any moment loses at most the blocks being computed.
     """
     import dask  # imported here: a run with nothing to compute never needs it
 
-    groups: dict[tuple, list[str]] = {}
-    for name in names:
-        var = ds[name].variable
-        groups.setdefault((var.dims, var.chunks), []).append(name)
-    total = sum(math.prod(len(c) for c in chunks) for (_, chunks) in groups)
-    bar = progress.bar("writing", total, unit="block") if progress is not None else Tick()
+    plans = _groups(ds, names, keep)
+    total = sum(len(p[3]) for p in plans)
+    done_before = sum(len(p[4]) for p in plans)
+    if progress is not None and done_before:
+        progress.note(f"    {done_before} of {total} blocks kept from an interrupted run: computing the other "
+                      f"{total - done_before}")
+    bar = progress.bar("writing", total, unit="block", initial=done_before) if progress is not None else Tick()
     from concurrent.futures import Executor
 
     pool = compute_with if isinstance(compute_with, Executor) else None
     client = compute_with if not isinstance(compute_with, str) and pool is None else None
+    workers = len(client.scheduler_info()["workers"]) if client is not None else (dask.system.CPU_COUNT or 2)
     if in_flight is None:
-        workers = len(client.scheduler_info()["workers"]) if client is not None else (dask.system.CPU_COUNT or 2)
         in_flight = max(2, 2 * workers)
     with ncio.dataset(path, "a") as nc:  # every call into netCDF/HDF5 under the process-wide lock (ncio)
-        for (_dims, chunks), group in groups.items():
-            offsets = [np.concatenate([[0], np.cumsum(c)]) for c in chunks]
+        for dims, group, offsets, indices, kept in plans:
             with ncio.locked():
                 targets = [nc.variables[name] for name in group]
             arrays = [ds[name].data for name in group]
-            indices = itertools.product(*(range(len(c)) for c in chunks))
-            while True:
-                batch = list(itertools.islice(indices, in_flight))
-                if not batch:
-                    break
-                tasks = [[a.blocks[idx] for a in arrays] for idx in batch]
-                if client is not None:
-                    futures = client.compute(tasks)
-                    results = client.gather(futures)
-                elif pool is not None:
-                    results = dask.compute(*tasks, scheduler="processes", pool=pool)
-                else:
-                    results = dask.compute(*tasks, scheduler=compute_with)
-                for idx, values in zip(batch, results, strict=True):
-                    sl = _region(offsets, idx)
-                    with ncio.locked():
-                        for target, value in zip(targets, values, strict=True):
-                            target[sl] = np.asarray(value)
-                    if checksums is not None:
-                        for name, value in zip(group, values, strict=True):
-                            checksums.add(name, np.asarray(value), [s.start for s in sl])
+            if keep is None:
+                arriving = _in_batches(indices, arrays, compute_with, client, pool, in_flight)
+            else:
+                tasks = {idx: [a.blocks[idx] for a in arrays] for idx in indices if idx not in kept}
+                arriving = itertools.chain(kept.items(), _as_completed(tasks, compute_with, client, pool, workers))
+            for idx, values in arriving:
+                sl = _region(offsets, idx)
+                if keep is not None and idx not in kept:
+                    keep.save(dims, group, sl, values)
+                with ncio.locked():
+                    for target, value in zip(targets, values, strict=True):
+                        target[sl] = np.asarray(value)
+                if checksums is not None:
+                    for name, value in zip(group, values, strict=True):
+                        checksums.add(name, np.asarray(value), [s.start for s in sl])
+                if idx not in kept:
                     bar()

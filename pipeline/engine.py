@@ -286,7 +286,7 @@ def _plan_facts(plans: list[StagePlan]) -> list[tuple]:
 
 
 def _run(scene, outdir, targets, force, report, compute_with, verify=None, checked=None):
-    from .compute import chunk_sweeps
+    from .compute import chunk_sweeps, quiet_libraries
 
     plans = plan(scene, outdir, targets, force, verify)
     scenes = {"base": scene, **scene.variants}
@@ -330,13 +330,14 @@ def _run(scene, outdir, targets, force, report, compute_with, verify=None, check
             shape=shape,
             reporter=report,
         )
-        with xr.set_options(keep_attrs=False):  # a variable's units come from its declaration, never by inheritance
-            computed = p.stage.compute(inp)
-        conforms(computed, shape, p.label)
-        ds = _finish(computed, p)
-        reuse.retire(p.path, outdir)  # the result it replaces stays reusable under its key
-        store.write(ds, p.path, compute_with=compute_with, progress=report,
-                    compress=scenes[p.variant].get("run.compress"))
+        with quiet_libraries():  # dask's notes on chunks and graphs: the engine's business, not the user's
+            with xr.set_options(keep_attrs=False):  # units come from declarations, never by inheritance
+                computed = p.stage.compute(inp)
+            conforms(computed, shape, p.label)
+            ds = _finish(computed, p)
+            reuse.retire(p.path, outdir)  # the result it replaces stays reusable under its key
+            store.write(ds, p.path, compute_with=compute_with, progress=report,
+                        compress=scenes[p.variant].get("run.compress"), keep_blocks=shape.keep_blocks)
         report.finish()
         results[p.variant].add(p.stage.name, p.path)
         report(f"{tag}: computed in {time.perf_counter() - t0:.2f} s ({why}) -> {p.path}")

@@ -268,6 +268,10 @@ class Shape:
     #: coordinate over more than its own dimension (a stress grid per point) counts when named here
     #: (with the dimensions it does not span, if any)
     lacks: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
+    #: each block is long work (a BEM solve): the engine keeps every finished block in the output
+    #: folder, under the result's content key, until the result is written, so that a run that is
+    #: killed resumes where it stopped (docs/reliability.md)
+    keep_blocks: bool = False
 
     @classmethod
     def of(cls, ds: xr.Dataset, small: int = 10**6, values_up_to: int = 10**4) -> "Shape":

@@ -8,6 +8,7 @@ hashes of its input files.
 
 from __future__ import annotations
 
+import contextlib
 import datetime as _dt
 import functools
 import hashlib
@@ -27,6 +28,8 @@ from .errors import OutputError
 from .version import __version__
 
 TMP_PREFIX = ".tmp-"
+#: folder (beside a result) of the finished blocks of results being written (:class:`roughcontact.compute.KeptBlocks`)
+BLOCKS = ".blocks"
 
 
 def canonical(value: Any):
@@ -140,7 +143,28 @@ def _encodable(ds: xr.Dataset) -> xr.Dataset:
     return ds
 
 
-def write(ds: xr.Dataset, path: Path, compute_with="threads", progress=None, compress: bool = True) -> None:
+def kept_blocks_folder(path: Path, key: str) -> Path:
+    """Where the finished blocks of the result ``path`` with content key ``key`` are kept while it
+    is written (a killed run resumes from them)."""
+    return Path(path).parent / BLOCKS / f"{Path(path).name}.{key[:20]}"
+
+
+def _forget_blocks(path: Path, keep: Path | None = None) -> None:
+    """Remove the kept blocks of ``path`` under every key but ``keep``'s (and an empty folder)."""
+    import shutil
+
+    folder = Path(path).parent / BLOCKS
+    if not folder.is_dir():
+        return
+    for old in folder.glob(f"{Path(path).name}.*"):
+        if old != keep:
+            shutil.rmtree(old, ignore_errors=True)
+    with contextlib.suppress(OSError):
+        folder.rmdir()  # only if empty
+
+
+def write(ds: xr.Dataset, path: Path, compute_with="threads", progress=None, compress: bool = True,
+          keep_blocks: bool = False) -> None:
     """Write ``ds`` to ``path`` atomically: a temporary file in the same folder, then a rename.
 
     Dask-backed variables are computed block by block by ``compute_with`` (a dask scheduler
@@ -152,10 +176,21 @@ def write(ds: xr.Dataset, path: Path, compute_with="threads", progress=None, com
     The file gets a checksum of its data and attributes (:mod:`roughcontact.integrity`). A file
     that cannot be written (full disk, no permission) is an :class:`OutputError` naming it, raised
     after its temporary is removed.
+
+    With ``keep_blocks`` (a stage whose blocks are long work, ``Shape(keep_blocks=True)``) every
+    finished block is also kept in :func:`kept_blocks_folder` (named by the result's content key)
+    until the result is in place: a run that is killed or fails resumes from them, computing only
+    the blocks not kept. Kept blocks of the same result under another key (an older scene) are
+    removed when it is written.
     """
-    from .compute import dask_variables, write_blocks
+    from .compute import KeptBlocks, dask_variables, write_blocks
 
     path = Path(path)
+    key = ds.attrs.get("stage_key")
+    keep = KeptBlocks(kept_blocks_folder(path, key), TMP_PREFIX) if keep_blocks and key else None
+    _forget_blocks(path, keep.folder if keep is not None else None)
+    if keep is not None:
+        clean_temporaries(keep.folder)  # a block being saved when a run was killed
     tmp = None
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
@@ -170,11 +205,13 @@ def write(ds: xr.Dataset, path: Path, compute_with="threads", progress=None, com
         sums = integrity.Checksums({name: ds[name].variable.chunks for name in lazy})
         if lazy:
             _define(tmp, ds, lazy, compress)
-            write_blocks(tmp, ds, lazy, compute_with, progress, checksums=sums)
+            write_blocks(tmp, ds, lazy, compute_with, progress, checksums=sums, keep=keep)
         integrity.stamp(tmp, sums.known())
         with open(tmp, "rb+") as fh:
             os.fsync(fh.fileno())
         os.replace(tmp, path)
+        if keep is not None:
+            _forget_blocks(path)
     except BaseException as exc:
         why = _why(exc, path) if _is_write_failure(exc) else None  # the free space before the temporary goes
         if tmp is not None:

@@ -138,24 +138,30 @@ def describe_validation_bem(inp: StageInput) -> Shape:
     """Working memory per load of a task: the solver's fields, about 200 bytes (25 values) per
     pixel of the largest map solved (pixels_per_wavelength x bandwidth, at most max_grid; docs/bem.md:
     ~150 measured), shared by the task's loads, which one task solves together (never chunked).
-    A map too large is blamed on validation.max_grid, which caps it (not on the loads)."""
+    A map too large is blamed on validation.max_grid, which caps it (not on the loads). Each task
+    (a block) is long work: the engine keeps it once finished, so that a killed run resumes
+    (``keep_blocks``)."""
     loads = max(np.size(inp["validation.reduced_pressure"]), 1)
     grids = np.outer(np.atleast_1d(inp["validation.bandwidth"]), np.atleast_1d(inp["validation.pixels_per_wavelength"]))
     solved = grids[grids <= inp["validation.max_grid"]]
     largest = int(solved.max()) if solved.size else int(inp["validation.max_grid"])
     return Shape(work={"values_per_pixel": 25, "pixels": largest ** 2, "per_load": 1 / loads},
-                 keys={"pixels": "validation.max_grid"}, coupled=("reduced_pressure",))
+                 keys={"pixels": "validation.max_grid"}, coupled=("reduced_pressure",), keep_blocks=True)
 
 
-_DIMS = "(hurst, bandwidth, eta, realization, pixels_per_wavelength, reduced_pressure)"
 TASK_COORDS = {
     "hurst": Var("1", "Hurst exponent H of both surfaces"),
-    "bandwidth": Var("1", "bandwidth zeta = q_max / qL of the case"),
-    "reduced_pressure": Var("1", "reduced pressure p / (E* g), g the rms slope of the combined spectrum"),
-    "pixels_per_wavelength": Var("1", "BEM pixels per shortest wavelength (resolution rung)"),
+    "bandwidth": Var("1", "bandwidth zeta = q_max / qL", attrs={"comment": "of the case's band qL..zeta qL"}),
+    "reduced_pressure": Var("1", "reduced pressure p / (E* g)",
+                            attrs={"comment": "g is the rms slope of the case's combined spectrum on its band"}),
+    "pixels_per_wavelength": Var("1", "BEM pixels per shortest wavelength",
+                                 attrs={"comment": "the resolution rung of the BEM task"}),
     "realization": Var("1", "index of the random surface pair"),
-    "grid": Var("1", "BEM pixels per side, pixels_per_wavelength x bandwidth"),
+    "grid": Var("1", "BEM pixels per side", attrs={"comment": "pixels_per_wavelength x bandwidth"}),
 }
+_PER_TASK = {"comment": "one value per BEM task (hurst, bandwidth, eta, realization, pixels_per_wavelength) and "
+                        "reduced pressure; NaN where the rung is beyond validation.max_grid or the contact is "
+                        "below one pixel"}
 
 register(
     Stage(
@@ -166,9 +172,10 @@ register(
         describe=describe_validation_bem,
         reads=BEM_KEYS,
         outputs={
-            "validation_bem_contact_area_ratio": Var("1", f"BEM relative contact area per task {_DIMS}"),
-            "validation_bem_mean_gap": Var("m", f"BEM mean interfacial separation per task {_DIMS}"),
-            "validation_bem_seconds_per_solve": Var("s", "wall time of the task divided by the pressures it solved"),
+            "validation_bem_contact_area_ratio": Var("1", "BEM relative contact area", attrs=_PER_TASK),
+            "validation_bem_mean_gap": Var("m", "BEM mean interfacial separation", attrs=_PER_TASK),
+            "validation_bem_seconds_per_solve": Var("s", "BEM wall time per solve", attrs={
+                "comment": "wall time of the task divided by the pressures it solved"}),
         },
         coords=TASK_COORDS,
         doc="The validation's BEM tasks: synthesized pairs solved at every reduced pressure, per (H, bandwidth, eta, "

@@ -32,7 +32,9 @@ def _chunked():
 def test_a_terminal_gets_live_bars_and_a_log_one_line_per_stage(tmp_path):
     tty, log = Terminal(), io.StringIO()
     engine.run(scenes.from_dict(_chunked()), tmp_path / "a", report=Reporter(tty))
-    engine.run(scenes.from_dict(_chunked()), tmp_path / "b", report=Reporter(log))
+    # work shorter than the interval between progress lines (5 s; 60 s here, so that a loaded machine
+    # cannot make it longer): one line per stage
+    engine.run(scenes.from_dict(_chunked()), tmp_path / "b", report=Reporter(log, interval=60.0))
     shown = tty.getvalue()
     assert "contact: computing" in shown and "writing" in shown and "block" in shown  # the block writer's bar
     lines = log.getvalue().splitlines()
@@ -68,3 +70,23 @@ def test_a_tick_sent_to_a_worker_process_does_nothing():
     assert isinstance(remote, Tick)
     remote(5)  # in another process the bar is not there: nothing happens, nothing fails
     assert tick.count == 1 and remote.count == 0 and "work" in tty.getvalue()
+
+
+def test_a_log_gets_progress_lines_for_long_work_after_its_start_line():
+    """Off a terminal, work that lasts past the interval gets lines (here interval 0: one per task),
+    preceded by the stage's start line, with what is done, the time so far and what is left;
+    with --quiet (bars=False) nothing but the stage lines."""
+    log, quiet = io.StringIO(), io.StringIO()
+    for stream, bars in ((log, None), (quiet, False)):
+        report = Reporter(stream, bars=bars, interval=0.0)
+        report.live("[1/1] validation_bem: computing (no result yet)")
+        tick = report.bar("writing", total=4, unit="block", initial=1)
+        tick()
+        tick()
+        report.finish()
+        report("[1/1] validation_bem: computed in 3 s")
+    lines = log.getvalue().splitlines()
+    assert lines[0] == "[1/1] validation_bem: computing (no result yet)"
+    assert lines[1].startswith("    writing: 2/4 blocks (50%), 0 s so far, about ")
+    assert lines[2].startswith("    writing: 3/4 blocks (75%)") and lines[3].endswith("computed in 3 s")
+    assert quiet.getvalue().splitlines() == ["[1/1] validation_bem: computed in 3 s"]

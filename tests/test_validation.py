@@ -106,3 +106,115 @@ def test_on_a_local_cluster(tmp_path, small):
                         scheduler=c.scheduler_address)["base"]
     for var in ("validation_bem_contact_area_ratio", "validation_bem_mean_gap"):
         xr.testing.assert_equal(threaded["validation_bem"][var], on["validation_bem"][var])
+
+
+# --- a long run resumes: each finished BEM task is kept (by the result's content key) until the result is written
+
+LADDER = {**SMALL, "interface": {"eta": [0.0]}, "outputs": {"variables": ["validation_bem_contact_area_ratio"]},
+          "validation": {**SMALL["validation"], "reduced_pressure": [0.1, 0.5]}}  # 2 realizations x 2 rungs: 4 tasks
+
+
+def _count_solves(monkeypatch):
+    """The BEM tasks solved in this process (every scheduler but processes and clusters)."""
+    import roughcontact.physics.validation as pv
+
+    calls, real = [], pv.bem_task
+
+    def counted(*args, **kwargs):
+        calls.append(args[:5])
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(pv, "bem_task", counted)
+    return calls
+
+
+def _leftovers(out):
+    return sorted(p.relative_to(out).as_posix() for p in out.rglob(".tmp-*"))
+
+
+def test_a_run_interrupted_after_its_first_task_resumes_with_the_others(tmp_path, monkeypatch):
+    """Ctrl-C (a KeyboardInterrupt, here raised by the progress tick of the first finished task)
+    keeps that task; the rerun solves only the three others and gives what an uninterrupted run
+    gives; nothing temporary remains, and the kept tasks go once the result is written."""
+    import io
+
+    from roughcontact.progress import Reporter, Tick
+
+    out, sc = tmp_path / "out", scenes.from_dict(LADDER)
+    solves = _count_solves(monkeypatch)
+
+    def interrupt(self, n=1):
+        raise KeyboardInterrupt
+
+    with monkeypatch.context() as m:
+        m.setattr(Tick, "__call__", interrupt)
+        with pytest.raises(KeyboardInterrupt):
+            engine.run(sc, out, report=Reporter(None), scheduler="synchronous")
+    assert len(solves) == 1 and not (out / "validation_bem.nc").exists()
+    assert len(list((out / ".blocks").rglob("*.npz"))) == 1 and _leftovers(out) == []
+    solves.clear()
+    log = io.StringIO()
+    res = engine.run(sc, out, report=Reporter(log, interval=0.0))["base"]["validation_bem"]
+    assert len(solves) == 3 and len(set(solves)) == 3
+    assert "1 of 4 blocks kept from an interrupted run" in log.getvalue()
+    assert "writing: 4/4 blocks (100%)" in log.getvalue()  # off a terminal: one line per task (interval 0 here)
+    assert _leftovers(out) == [] and not (out / ".blocks").exists()
+    solves.clear()
+    whole = engine.run(sc, tmp_path / "whole", report=Reporter(None))["base"]["validation_bem"]
+    assert len(solves) == 4
+    for var in ("validation_bem_contact_area_ratio", "validation_bem_mean_gap"):
+        xr.testing.assert_equal(res[var], whole[var])
+
+
+def test_a_killed_run_resumes_and_leaves_no_temporary(tmp_path, monkeypatch):
+    """A run killed (SIGKILL) after its first kept task: the rerun solves only what was not kept,
+    removes the killed run's temporaries, and ends with none."""
+    import json
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    out = tmp_path / "out"
+    script = ("import json, sys, time\n"
+              "import roughcontact.physics.validation as pv\n"
+              "real = pv.bem_task\n"
+              "def slow(*a, **k):\n"
+              "    time.sleep(1.0)\n"
+              "    return real(*a, **k)\n"
+              "pv.bem_task = slow\n"
+              "from roughcontact import engine, scene\n"
+              "engine.run(scene.from_dict(json.loads(sys.argv[1])), sys.argv[2], report=engine.Reporter(None),\n"
+              "           scheduler='synchronous')\n")
+    proc = subprocess.Popen([sys.executable, "-c", script, json.dumps(LADDER), str(out)])
+    try:
+        deadline = time.monotonic() + 300
+        while not list((out / ".blocks").rglob("*.npz")) and proc.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.05)
+        os.kill(proc.pid, signal.SIGKILL)
+    finally:
+        proc.wait()
+    kept = len(list((out / ".blocks").rglob("*.npz")))
+    assert 1 <= kept < 4 and not (out / "validation_bem.nc").exists()
+    assert _leftovers(out)  # the killed run's result being written
+    solves = _count_solves(monkeypatch)
+    engine.run(scenes.from_dict(LADDER), out, report=engine.Reporter(None))
+    assert len(solves) == 4 - kept
+    assert _leftovers(out) == [] and not (out / ".blocks").exists()
+
+
+def test_no_dask_warning_reaches_the_user(tmp_path, monkeypatch):
+    """Many one-task blocks make dask warn ("Increasing number of chunks by factor of 12"): the
+    engine's choice of chunks, not the user's, so it is not shown."""
+    import warnings
+
+    import roughcontact.physics.validation as pv
+
+    monkeypatch.setattr(pv, "bem_task", lambda *a, **k: np.full((np.size(a[5]), 3), 0.5))
+    raw = {**LADDER, "interface": {"eta": [0.0, 0.5, -1.0]},
+           "validation": {**LADDER["validation"], "hurst": [0.5, 0.8], "bandwidth": [4, 8]}}
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        engine.run(scenes.from_dict(raw), tmp_path, report=engine.Reporter(None))
+    assert [str(w.message) for w in seen if "dask" in w.filename or "chunks" in str(w.message)] == []

@@ -17,6 +17,6 @@ register_coords(
     # soil, ...); CF-1.11's units_metadata says it is a temperature on its scale, not a difference
     T=Var("K", "temperature", attrs={"units_metadata": "temperature: on_scale"}),
     omega=Var("rad/s", "angular frequency"),
-    draw=Var("1", "spectrum draw: 0 = the measured spectrum, 1..N = spectra drawn within its statistical band",
-             standard_name="realization"),
+    draw=Var("1", "spectrum draw", standard_name="realization", attrs={
+        "comment": "0 is the measured spectrum; 1..N are spectra drawn within its statistical band"}),
 )

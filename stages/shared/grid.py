@@ -12,8 +12,9 @@ from roughcontact.stage import Param, Section, Var, readable, register_params, r
 from .surfaces import SURFACES, is_rough, surface_bands
 
 #: qL, stored by the stages whose results are over zeta, so that every zeta has its reference
-Q_REFERENCE = Var("1/m", "reference wavenumber qL of the magnification zeta = q/qL: the lowest wavenumber of the "
-                  "q grid (grid.q_min, else the lowest of the surfaces), the system size L = 2 pi/qL")
+Q_REFERENCE = Var("1/m", "reference wavenumber qL", attrs={
+    "comment": "the wavenumber the magnification zeta = q/qL is measured from: the lowest wavenumber of the q grid "
+               "(grid.q_min, else the lowest wavenumber of the surfaces); roughness below qL is not counted"})
 
 
 def reference_wavenumber(psd, bands) -> tuple[float | None, str]:

@@ -6,7 +6,8 @@ from roughcontact.physics.contact import effective_modulus
 from roughcontact.stage import Param, Section, Var, register_section
 
 #: E*, stored by the stages whose results are read against it (p/E*)
-E_STAR = Var("Pa", "effective modulus E* = E/(1 - nu^2)")
+E_STAR = Var("Pa", "effective modulus E*", attrs={
+    "comment": "E* = E/(1 - nu^2) of the elastic solid (material.E, material.nu) on the rigid substrate"})
 
 #: the scene keys E* is derived from
 MATERIAL_KEYS = ("material.E", "material.nu")
