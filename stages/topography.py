@@ -28,7 +28,7 @@ from roughcontact.stage import Figure, Param, Shape, Stage, StageInput, UserErro
 
 from .figures.topography import figure_coherence, figure_measured_psd
 from .shared.maps import topography_files
-from .shared.measured import container_files, merged_psd, mode_factor, prepared_files
+from .shared.measured import container_files, merged_psd, mode_factor, prepared_files, unbias_processing
 from .shared.surfaces import CONTAINER_KEYS, MAP_KEYS, SURFACES, is_measured, surface_reads
 
 register_params(
@@ -44,7 +44,8 @@ def _spectra(p, edges, spec, other=None):
     if p["analysis"] == "profiles":
         s = binned_spectra_profiles(p["h"], p["sizes"][0], edges, p["q_max"], spec["hurst"], h2)
     else:
-        s = binned_spectra_area(p["h"], p["sizes"][0], p["sizes"][1], edges, p["q_max"], h2)
+        s = unbias_processing(p, edges, binned_spectra_area(p["h"], p["sizes"][0], p["sizes"][1], edges, p["q_max"],
+                                                            h2))
     s["n"] = s["n"] / mode_factor(p, edges)  # a window correlates neighbouring modes
     return s
 
