@@ -137,7 +137,11 @@ def _surface_vars(name, spectra, described, bpd):
               "radial_average": f"mean over Fourier modes with |q| in log bins, {bpd} per decade",
               "merge": "in each bin, the files (measurements) with modes there averaged with weights n, their "
                        "effective independent modes (inverse-variance weights); each file's range in 'files' "
-                       "(q_range_per_m)"}
+                       "(q_range_per_m)",
+              "processing_bias": "removed: the bins of each non-periodic or windowed area map divided by the factor by "
+                                 "which its detrending and window bias them, the expected periodogram of a roll-off "
+                                 "fit to its bins over the fit (docs/measured-data.md); line scans and periodic "
+                                 "unwindowed maps unchanged"}
     estimate = ("C / sqrt(n), n the independent modes (Gaussian random-phase statistics; a window's correlation "
                 "of neighbouring modes counted), times the Birge ratio where the files disagree beyond it (chi-square "
                 "test at 1 %); correlated profiles make it an underestimate")
@@ -223,7 +227,7 @@ def compute_topography(inp: StageInput) -> xr.Dataset:
 register(
     Stage(
         name="topography",
-        version="3",
+        version="4",
         compute=compute_topography,
         # of a measured surface the map keys and the line-scan H; of any other surface only its kind
         reads=(*surface_reads({"topography": (*MAP_KEYS, "hurst"), "container": (*CONTAINER_KEYS, "hurst"), "*": ()}),
