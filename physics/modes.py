@@ -112,7 +112,7 @@ def window_mode_factor_area(nx, ny, sx, sy, edges, q_max, w, box=192):
         else:
             a = b[max(0, -dx):b.shape[0] - max(0, dx), max(0, -dy):b.shape[1] - max(0, dy)]
             c = b[max(0, dx):b.shape[0] - max(0, -dx), max(0, dy):b.shape[1] - max(0, -dy)]
-        same = (a == c) & (a >= 0)
+        same = (a >= 0) & (c >= 0)  # with the modes of neighbouring bins: the draws take bins as independent
         S += r2 * np.bincount(a[same], minlength=nb)
     inner = np.inf if whole else 2.0 * np.pi * min((bx - reach) / sx, (by - reach) / sy)
     exact = (np.minimum(edges[1:], q_max) <= inner) | (edges[:-1] >= q_max)
