@@ -143,7 +143,8 @@ def _surface_vars(name, spectra, described, bpd):
                                  "fit to its bins over the fit (docs/measured-data.md); line scans and periodic "
                                  "unwindowed maps unchanged"}
     estimate = ("C / sqrt(n), n the independent modes (Gaussian random-phase statistics; a window's correlation "
-                "of neighbouring modes counted), times the Birge ratio where the files disagree beyond it (chi-square "
+                "of neighbouring modes counted, for maps also across neighbouring bins, which the bands draw "
+                "independently), times the Birge ratio where the files disagree beyond it (chi-square "
                 "test at 1 %); correlated profiles make it an underestimate")
     return {f"psd_{name}_measured": (C, common), f"psd_{name}_measured_error": (err, {"estimate": estimate}),
             f"q_{name}_measured": (q, {}), f"modes_{name}": (n, {}), f"psd_{name}_measured_spread": (ratio, {})}, n > 0

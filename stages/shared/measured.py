@@ -74,13 +74,17 @@ def prepared_files(name: str, spec: dict, files) -> list[dict]:
 
 
 def mode_factor(p: dict, edges: np.ndarray):
-    """Per bin, by how much the window of scan ``p`` divides its independent modes (1: no window)."""
+    """Per bin, by how much the window of scan ``p`` divides its independent modes (1: no window).
+
+    For maps the modes' correlations with neighbouring bins are counted too: the bands draw
+    bins independently, and what they predict (G, u) sums over bins (issue 24)."""
     if p["window"] != "hann":
         return 1.0
     h, sizes = p["h"], p["sizes"]
     if p["analysis"] == "profiles":
         return window_mode_factor_profiles(h.shape[0], sizes[0], edges, p["q_max"], hann_window_1d(h.shape[0]))
-    return window_mode_factor_area(*h.shape, *sizes, edges, p["q_max"], hann_window_radial(*h.shape, *sizes))
+    return window_mode_factor_area(*h.shape, *sizes, edges, p["q_max"], hann_window_radial(*h.shape, *sizes),
+                                   neighbours=True)
 
 
 def unbias_processing(p: dict, edges: np.ndarray, s: dict) -> dict:
