@@ -187,6 +187,166 @@ def binned_spectra_profiles(h1, sx, edges, q_max, hurst, h2=None):
     return res
 
 
+# ----------------------------------------------------------------------------------------
+# The bias of detrended, windowed crops
+# ----------------------------------------------------------------------------------------
+
+
+def expected_processed_psd_area(psd, nx, ny, sx, sy, window=None, basis=None, periodic=False):
+    """Expected periodogram of a detrended, windowed map of a Gaussian random surface with PSD ``psd``.
+
+    The prepared map is g = w (h - P h) (P: least-squares projection on the detrended
+    polynomials, w: the window); its expected :func:`psd_map` at the map's Fourier modes k is
+
+    E|DFT g|_k^2 = F Sigma F^H - 2 Re sum_j a_j c_j^* + sum_ij a_i M_ij a_j^*,
+
+    F = e^{-ikx} w(x), Sigma the covariance R(x - x') of the heights, a_j = DFT(w b_j),
+    c_j = DFT(w Sigma b_j), M = b^T Sigma b over the orthonormal polynomials b_j. The first
+    term is the PSD convolved with the window's |DFT|^2, sum over lags of R(tau) A_w(tau)
+    e^{-ik tau} with A_w the window's autocorrelation. R is the inverse transform of the PSD
+    on the lattice of a periodic cell twice the map's size (a crop of a larger surface), or of
+    the map itself (``periodic``; then without a window and polynomial it is the PSD).
+
+    Parameters
+    ----------
+    psd : callable
+        C(q) (m^4) of |q| (1/m), finite at q = 0 (the model of the surface's spectrum).
+    nx, ny : int
+        Grid points.
+    sx, sy : float
+        Physical sizes (m).
+    window : array (nx, ny) or None
+        The window the map was multiplied with (dimensionless).
+    basis : array (p, nx, ny) or None
+        Orthonormal polynomials removed before the window
+        (:func:`roughcontact.physics.preprocessing.detrend_basis`).
+    periodic : bool
+        The map is one period of a periodic surface.
+
+    Returns
+    -------
+    array (nx, ny // 2 + 1)
+        E[psd_map(g)] (m^4) on the real-to-complex lattice of :func:`binned_spectra_area`.
+
+    References
+    ----------
+    Percival & Walden, Spectral Analysis for Physical Applications (1993), ch. 6 (expected
+    periodogram of a tapered series); docs/theory.md, section "Spectra".
+    """
+    m = 1 if periodic else 2
+    qx = 2.0 * np.pi * np.fft.fftfreq(m * nx, d=sx / nx)
+    qy = 2.0 * np.pi * np.fft.fftfreq(m * ny, d=sy / ny)
+    cell = np.fft.ifft2(psd(np.hypot(qx[:, None], qy[None, :]))).real
+    cell *= (m * nx) * (m * ny) * (2.0 * np.pi) ** 2 / (m * sx * m * sy)  # R(x) = sum_q C dq^2 e^{iqx}
+    lags = (np.r_[0:nx, -nx:0] % (m * nx), np.r_[0:ny, -ny:0] % (m * ny))
+    R = cell[np.ix_(*lags)]  # covariance at lags -n .. n-1 (wrapped) on a 2nx x 2ny grid
+    w = np.ones((nx, ny)) if window is None else np.asarray(window, dtype=float)
+    A = np.fft.ifft2(np.abs(np.fft.fft2(w, s=(2 * nx, 2 * ny))) ** 2).real
+    E = np.fft.fft2(R * A)[::2, ::2][:, : ny // 2 + 1].real
+    if basis is not None:
+        FR = np.fft.fft2(R)
+        V = [np.fft.ifft2(FR * np.fft.fft2(b, s=(2 * nx, 2 * ny))).real[:nx, :ny] for b in basis]
+        a = [np.fft.rfft2(w * b) for b in basis]
+        c = [np.fft.rfft2(w * v) for v in V]
+        for i in range(len(basis)):
+            E -= 2.0 * (a[i] * c[i].conj()).real
+            for j in range(len(basis)):
+                E += np.sum(basis[i] * V[j]) * (a[i] * a[j].conj()).real
+    return E * ((sx / nx) * (sy / ny)) ** 2 / ((2.0 * np.pi) ** 2 * sx * sy)
+
+
+def rolloff_fit(q, C, n):
+    """Least-squares fit of C = C0 (1 + (q/q0)^2)^(-a/2) to binned PSDs, in log C with weights n.
+
+    A smooth model of a measured spectrum (flat below q0, power law q^-a above; a = 2 + 2H
+    for a self-affine surface) for corrections that need its shape but must not follow the
+    noise of few-mode bins.
+
+    Parameters
+    ----------
+    q, C, n : arrays over the bins
+        Mean wavenumbers (1/m), PSD (m^4) and independent modes (weights) of valid bins.
+
+    Returns
+    -------
+    callable
+        C(q) (m^4) of |q| (1/m), finite at q = 0.
+    """
+    from scipy.optimize import least_squares  # imported when a map is corrected, not with the stage declarations
+
+    x, y, sw = np.log(q / q[0]), np.log(C), np.sqrt(n)
+
+    def residual(theta):
+        return sw * (theta[0] - theta[2] * np.maximum(x - theta[1], 0.0) - y)
+
+    a0 = -np.polyfit(x, y, 1, w=sw)[0]
+    start = [float(np.average(y[: max(2, y.size // 8)])), float(np.clip(x[min(2, x.size - 1)], -2.0, x[-1])),
+             float(np.clip(a0, 0.5, 7.5))]
+    theta = least_squares(residual, start, bounds=([-np.inf, -3.0, 0.0], [np.inf, x[-1] + 1.0, 8.0])).x
+    q0 = q[0] * np.exp(theta[1])
+
+    def psd(k):
+        return np.exp(theta[0]) * np.maximum(np.asarray(k) / q0, 1.0) ** (-theta[2])
+
+    return psd
+
+
+#: lattice steps 2 pi / L above which bins enter the model of the spectrum (below, their own noise would be corrected)
+FIT_FROM = 2.0
+
+
+def processing_bias_area(q, C, n, nx, ny, sx, sy, edges, q_max, window=None, basis=None, periodic=False,
+                         iterations=2):
+    """Per bin, the factor by which detrending and a window bias the binned PSD of a map.
+
+    r_b = <E psd_map(g)>_b / <C>_b, the bin means over the modes of :func:`binned_spectra_area`
+    of :func:`expected_processed_psd_area` and of the spectrum itself. The spectrum is not
+    known; it is modelled by a smooth fit to the measured bins (:func:`rolloff_fit`; through
+    the bins themselves the correction would follow their noise and over-correct few-mode
+    bins) and iterated: the model of step i + 1 is fitted to C_meas / r_i.
+    Below 1 where the removed polynomial takes the longest waves' power, above 1 where the
+    window's kernel (about 2 pi / L wide) smooths a convex spectrum (at k lattice steps from
+    q = 0, about 1 + a^2 / (6 k^2) for C ~ q^-a).
+
+    Parameters
+    ----------
+    q, C, n : arrays over the bins
+        Mean wavenumbers (1/m), binned PSD (m^4) of the prepared map (NaN: empty bin) and
+        its modes (the fit's weights).
+    nx, ny, sx, sy, window, basis, periodic
+        As :func:`expected_processed_psd_area`.
+    edges : array
+        Bin edges (1/m).
+    q_max : float
+        Highest wavenumber binned (1/m).
+    iterations : int
+        Fixed-point iterations of the model.
+
+    Returns
+    -------
+    array over the bins
+        r (dimensionless; 1 in empty bins): divide the binned PSD by it.
+    """
+    nb = edges.size - 1
+    idx, wcol, count, _ = area_lattice(nx, ny, sx, sy, edges, q_max)
+    qk = np.hypot(2.0 * np.pi * np.fft.fftfreq(nx, d=sx / nx)[:, None],
+                  2.0 * np.pi * np.fft.rfftfreq(ny, d=sy / ny)[None, :])
+    ok = np.isfinite(C) & (C > 0) & np.isfinite(q)
+    r = np.ones(nb)
+    if np.count_nonzero(ok) < 2:
+        return r
+    sl = slice(1, nb + 1)
+    for _ in range(iterations):
+        fit = ok & (q >= FIT_FROM * 2.0 * np.pi / max(sx, sy))
+        fit = fit if np.count_nonzero(fit) >= 3 else ok
+        psd = rolloff_fit(q[fit], C[fit] / r[fit], n[fit])
+        E = expected_processed_psd_area(psd, nx, ny, sx, sy, window, basis, periodic)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            r = np.where(count[sl] > 0, bincount(idx, E * wcol, nb + 1)[sl] / bincount(idx, psd(qk) * wcol, nb + 1)[sl],
+                         1.0)
+    return r
+
+
 def second_surface_hurst(spectra, hurst1, hurst2):
     """Paired line-scan spectra converted with H1 (:func:`binned_spectra_profiles`), with the
     second surface's PSD C22 rescaled to its own H2: C22 c(H2)/c(H1), C12 sqrt(c(H2)/c(H1)).

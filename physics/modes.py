@@ -64,7 +64,7 @@ def _bin_index(q, edges, q_max):
     return b
 
 
-def window_mode_factor_area(nx, ny, sx, sy, edges, q_max, w, box=192):
+def window_mode_factor_area(nx, ny, sx, sy, edges, q_max, w, box=192, neighbours=False):
     """Per bin, the factor by which a window divides the independent modes of a map.
 
     Var(bin mean) = 2 S C^2 / m^2 with m the bin's modes in the full Fourier plane and
@@ -88,6 +88,11 @@ def window_mode_factor_area(nx, ny, sx, sy, edges, q_max, w, box=192):
         The window applied to the heights.
     box : int
         Half-width (lattice steps) of the exactly summed region.
+    neighbours : bool
+        Count each mode's correlations with the modes of every bin, not only its own: the
+        variance a bin contributes to a sum over neighbouring bins (what errors drawn
+        independently per bin must carry for integrals of the spectrum); larger than the
+        bin's own factor where bins are a few lattice steps wide.
 
     Returns
     -------
@@ -112,7 +117,7 @@ def window_mode_factor_area(nx, ny, sx, sy, edges, q_max, w, box=192):
         else:
             a = b[max(0, -dx):b.shape[0] - max(0, dx), max(0, -dy):b.shape[1] - max(0, dy)]
             c = b[max(0, dx):b.shape[0] - max(0, -dx), max(0, dy):b.shape[1] - max(0, -dy)]
-        same = (a == c) & (a >= 0)
+        same = (a >= 0) & ((c >= 0) if neighbours else (a == c))
         S += r2 * np.bincount(a[same], minlength=nb)
     inner = np.inf if whole else 2.0 * np.pi * min((bx - reach) / sx, (by - reach) / sy)
     exact = (np.minimum(edges[1:], q_max) <= inner) | (edges[:-1] >= q_max)

@@ -56,6 +56,30 @@ def detrend(h, degree, *, profiles=False):
     return h
 
 
+def detrend_basis(shape, degree) -> np.ndarray:
+    """Orthonormal basis of the polynomials :func:`detrend` removes from a map (total degree).
+
+    Parameters
+    ----------
+    shape : (int, int)
+        Grid points (nx, ny).
+    degree : int
+        0, 1 or 2.
+
+    Returns
+    -------
+    array (p, nx, ny)
+        The p = 1, 3 or 6 polynomials, orthonormal over the grid (sum of squares 1); removing
+        the projection on them is :func:`detrend` with that degree.
+    """
+    nx, ny = shape
+    px, py = _orthogonal_polynomials(nx, degree), _orthogonal_polynomials(ny, degree)
+    px = px / np.sqrt(np.sum(px * px, axis=0))
+    py = py / np.sqrt(np.sum(py * py, axis=0))
+    return np.stack([np.outer(px[:, a], py[:, b]) for a in range(degree + 1) for b in range(degree + 1)
+                     if a + b <= degree])
+
+
 def hann_window_1d(n: int) -> np.ndarray:
     """Periodic Hann window along x, w_i = [1 - cos(2 pi i / n)] / 2, scaled to mean square 1.
 

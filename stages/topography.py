@@ -28,7 +28,14 @@ from roughcontact.stage import Figure, Param, Shape, Stage, StageInput, UserErro
 
 from .figures.topography import figure_coherence, figure_measured_psd
 from .shared.maps import topography_files
-from .shared.measured import container_files, measurements_entered, merged_psd, mode_factor, prepared_files
+from .shared.measured import (
+    container_files,
+    measurements_entered,
+    merged_psd,
+    mode_factor,
+    prepared_files,
+    unbias_processing,
+)
 from .shared.surfaces import CONTAINER_KEYS, MAP_KEYS, SURFACES, is_measured, surface_reads
 
 register_params(
@@ -44,7 +51,8 @@ def _spectra(p, edges, spec, other=None):
     if p["analysis"] == "profiles":
         s = binned_spectra_profiles(p["h"], p["sizes"][0], edges, p["q_max"], spec["hurst"], h2)
     else:
-        s = binned_spectra_area(p["h"], p["sizes"][0], p["sizes"][1], edges, p["q_max"], h2)
+        s = unbias_processing(p, edges, binned_spectra_area(p["h"], p["sizes"][0], p["sizes"][1], edges, p["q_max"],
+                                                            h2))
     s["n"] = s["n"] / mode_factor(p, edges)  # a window correlates neighbouring modes
     return s
 
@@ -141,9 +149,14 @@ def _surface_vars(name, spectra, described, bpd, entered):
               "radial_average": f"mean over Fourier modes with |q| in log bins, {bpd} per decade",
               "merge": "in each bin, the files (measurements) with modes there averaged with weights n, their "
                        "effective independent modes (inverse-variance weights); each file's range in 'files' "
-                       "(q_range_per_m)"}
+                       "(q_range_per_m)",
+              "processing_bias": "removed: the bins of each non-periodic or windowed area map divided by the factor by "
+                                 "which its detrending and window bias them, the expected periodogram of a roll-off "
+                                 "fit to its bins over the fit (docs/measured-data.md); line scans and periodic "
+                                 "unwindowed maps unchanged"}
     estimate = ("C / sqrt(n), n the independent modes (Gaussian random-phase statistics; a window's correlation "
-                "of neighbouring modes counted), times the Birge ratio where the files disagree beyond it (chi-square "
+                "of neighbouring modes counted, for maps also across neighbouring bins, which the bands draw "
+                "independently), times the Birge ratio where the files disagree beyond it (chi-square "
                 "test at 1 %); correlated profiles make it an underestimate")
     return {f"psd_{name}_measured": (C, common), f"psd_{name}_measured_error": (err, {"estimate": estimate}),
             f"q_{name}_measured": (q, {}), f"modes_{name}": (n, {}), f"psd_{name}_measured_spread": (ratio, {})}, n > 0
@@ -233,7 +246,7 @@ def _empty(surface: str) -> dict:
 register(
     Stage(
         name="topography",
-        version="3",
+        version="4",
         compute=compute_topography,
         # of a measured surface the map keys and the line-scan H; of any other surface only its kind
         reads=(*surface_reads({"topography": (*MAP_KEYS, "hurst"), "container": (*CONTAINER_KEYS, "hurst"), "*": ()}),

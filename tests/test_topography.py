@@ -535,3 +535,77 @@ def test_filling_many_points_warns(tmp_path):
         np.save(tmp_path / "all.npy", np.full((16, 16), np.nan))
         read_topography(tmp_path / "all.npy", key="solid", height_unit="m", fill="harmonic")
     assert info.value.key == "solid.fill_undefined"
+
+
+# -- The bias of detrended, windowed crops (issue 24) ---------------------------------------
+
+
+def _bins_of(values, nx, ny, sx, sy, edges, q_max):
+    """Bin means of per-mode values on the real-to-complex lattice, as binned_spectra_area averages."""
+    from roughcontact.physics.lattice import area_lattice, bincount
+
+    idx, w, count, qsum = area_lattice(nx, ny, sx, sy, edges, q_max)
+    nb = edges.size - 1
+    with np.errstate(invalid="ignore"):
+        return bincount(idx, values * w, nb + 1)[1:nb + 1] / count[1:nb + 1], qsum[1:nb + 1] / count[1:nb + 1], \
+            count[1:nb + 1] / 2.0
+
+
+def test_expected_periodogram_of_a_periodic_unwindowed_map_is_the_psd():
+    """Without a window, a periodic map's periodogram is unbiased (the mean removed touches q = 0 only)."""
+    from roughcontact.physics.estimators import expected_processed_psd_area
+    from roughcontact.physics.preprocessing import detrend_basis
+
+    n, sx, sy = 32, L, 0.75 * L
+    psd = _psd(q0=6 * np.pi / L)
+    E = expected_processed_psd_area(lambda q: psd(np.maximum(q, 1.0)), n, n, sx, sy, None,
+                                    detrend_basis((n, n), 0), periodic=True)
+    q = np.hypot(2 * np.pi * np.fft.fftfreq(n, d=sx / n)[:, None], 2 * np.pi * np.fft.rfftfreq(n, d=sy / n)[None, :])
+    assert np.allclose(E[q > 0], psd(q[q > 0]), rtol=1e-10)
+
+
+def test_expected_periodogram_of_windowed_detrended_crops_matches_monte_carlo():
+    """The expected periodogram of plane-detrended, Hann-windowed crops of a larger surface
+    equals the mean over 1500 crops within their sampling error (3.5 sigma per bin of the lowest
+    ten, whose modes are where the bias is: 0.6-1.15 times the PSD)."""
+    from roughcontact.physics.estimators import expected_processed_psd_area
+    from roughcontact.physics.preprocessing import detrend_basis, hann_window_radial
+
+    n, side = 24, L
+    psd = _psd(H=0.5, q0=2 * 2 * np.pi / L, C0=1e-32)
+    w, basis = hann_window_radial(n, n, side, side), detrend_basis((n, n), 1)
+    E = expected_processed_psd_area(psd, n, n, side, side, w, basis)
+    rng = np.random.default_rng(24)
+    edges = log_bin_edges(2 * np.pi / side, np.pi * n / side, 20)
+    runs = np.array([binned_spectra_area(w * detrend(synthesize(psd, 2 * n, 2 * n, 2 * side, 2 * side, rng)[:n, :n], 1),
+                                         side, side, edges, np.pi * n / side)["C11"] for _ in range(1500)])
+    expected, _, _ = _bins_of(E, n, n, side, side, edges, np.pi * n / side)
+    ok = np.flatnonzero(np.isfinite(expected))[:10]
+    mean, se = runs[:, ok].mean(axis=0), runs[:, ok].std(axis=0) / np.sqrt(len(runs))
+    assert np.all(np.abs(mean - expected[ok]) < 3.5 * se)
+
+
+@pytest.mark.parametrize("H, q0_steps", [(0.5, 2.0), (0.8, 5.0)])
+def test_unbiased_windowed_psd_of_a_self_affine_crop_in_its_lowest_bins(H, q0_steps):
+    """The expected binned PSD of a plane-detrended, Hann-windowed 64^2 crop of a self-affine
+    surface (roll-off q0 at 2 or 5 lattice steps 2 pi / L) is 10-40 % off the true one in its
+    ten lowest bins; corrected by processing_bias_area (which models the spectrum by a fit to
+    the measured bins, not knowing the truth) it is within 8 %."""
+    from roughcontact.physics.estimators import expected_processed_psd_area, processing_bias_area
+    from roughcontact.physics.preprocessing import detrend_basis, hann_window_radial
+
+    n, side = 64, 4 * L
+    q_max = np.pi * n / side
+    psd = _psd(H=H, q0=q0_steps * 2 * np.pi / side, C0=1e-32)
+    w, basis = hann_window_radial(n, n, side, side), detrend_basis((n, n), 1)
+    edges = log_bin_edges(2 * np.pi / side, q_max, 20)
+    measured, q, modes = _bins_of(expected_processed_psd_area(psd, n, n, side, side, w, basis), n, n, side, side,
+                                  edges, q_max)
+    qk = np.hypot(*np.meshgrid(2 * np.pi * np.fft.fftfreq(n, d=side / n), 2 * np.pi * np.fft.rfftfreq(n, d=side / n),
+                               indexing="ij"))
+    true, _, _ = _bins_of(psd(qk), n, n, side, side, edges, q_max)
+    r = processing_bias_area(q, measured, modes, n, n, side, side, edges, q_max, w, basis)
+    low = np.flatnonzero(np.isfinite(measured))[:10]
+    before, after = measured[low] / true[low], measured[low] / r[low] / true[low]
+    assert np.max(np.abs(before - 1)) > 0.1
+    assert np.max(np.abs(after - 1)) < 0.08, (before.round(3), after.round(3))

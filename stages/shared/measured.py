@@ -19,9 +19,9 @@ import json
 import numpy as np
 import xarray as xr
 
-from roughcontact.physics.estimators import merge_spectra
+from roughcontact.physics.estimators import merge_spectra, processing_bias_area
 from roughcontact.physics.modes import window_mode_factor_area, window_mode_factor_profiles
-from roughcontact.physics.preprocessing import hann_window_1d, hann_window_radial
+from roughcontact.physics.preprocessing import detrend_basis, hann_window_1d, hann_window_radial
 from roughcontact.physics.uncertainty import (
     coherence_draws_on_grid,
     coherence_error_on_grid,
@@ -32,6 +32,7 @@ from roughcontact.physics.uncertainty import (
 from roughcontact.stage import FileInput, UserError
 
 from .maps import measured_bins, prepare_map, process_map
+from .surfaces import DETREND_DEGREE
 
 #: contact.engineering's detrend modes (SurfaceTopography) and the polynomial each removes
 DETREND_FROM_MODE = {"center": "mean", "height": "plane", "slope": "plane", "curvature": "curvature"}
@@ -89,13 +90,40 @@ def prepared_files(name: str, spec: dict, files) -> list[dict]:
 
 
 def mode_factor(p: dict, edges: np.ndarray):
-    """Per bin, by how much the window of scan ``p`` divides its independent modes (1: no window)."""
+    """Per bin, by how much the window of scan ``p`` divides its independent modes (1: no window).
+
+    For maps the modes' correlations with neighbouring bins are counted too: the bands draw
+    bins independently, and what they predict (G, u) sums over bins (issue 24)."""
     if p["window"] != "hann":
         return 1.0
     h, sizes = p["h"], p["sizes"]
     if p["analysis"] == "profiles":
         return window_mode_factor_profiles(h.shape[0], sizes[0], edges, p["q_max"], hann_window_1d(h.shape[0]))
-    return window_mode_factor_area(*h.shape, *sizes, edges, p["q_max"], hann_window_radial(*h.shape, *sizes))
+    return window_mode_factor_area(*h.shape, *sizes, edges, p["q_max"], hann_window_radial(*h.shape, *sizes),
+                                   neighbours=True)
+
+
+def unbias_processing(p: dict, edges: np.ndarray, s: dict) -> dict:
+    """The binned spectra ``s`` of area map ``p`` with the bias of its detrending and window
+    removed (:func:`roughcontact.physics.estimators.processing_bias_area`, each spectrum
+    modelled by itself; the cross-spectrum divided by the geometric mean of both factors);
+    unchanged for periodic maps without a window and for line scans. Adds ``processing_bias``
+    (the factor of C11, 1 where unchanged)."""
+    nb = edges.size - 1
+    if p["analysis"] != "area" or (p["periodic"] and p["window"] == "none"):
+        return dict(s, processing_bias=np.ones(nb))
+    h, (sx, sy) = p["h"], p["sizes"]
+    args = dict(nx=h.shape[0], ny=h.shape[1], sx=sx, sy=sy, edges=edges, q_max=p["q_max"],
+                window=hann_window_radial(*h.shape, sx, sy) if p["window"] == "hann" else None,
+                basis=detrend_basis(h.shape, DETREND_DEGREE[p["detrend"]]), periodic=p["periodic"])
+    out = dict(s)
+    r1 = processing_bias_area(s["q"], s["C11"], s["n"], **args)
+    out["C11"] = s["C11"] / r1
+    if "C22" in s:
+        r2 = processing_bias_area(s["q"], s["C22"], s["n"], **args)
+        out["C22"], out["C12"] = s["C22"] / r2, s["C12"] / np.sqrt(r1 * r2)
+    out["processing_bias"] = r1
+    return out
 
 
 def merged_psd(spectra: list[dict], key: str = "C11"):

@@ -15,8 +15,9 @@ cutoff of a 40 nm tip. Two layouts:
   independent modes in each of its two lowest bins (printed), and those bins weigh more.
 
 The chain is the stages' own code without the engine's files: ``process_map`` (detrend,
-window, reliability cutoff), the topography stage's binned spectra with the window's mode
-factor, ``merged_psd``, ``measured_psd_on_grid`` / ``drawn_psd`` on the psd stage's grid (the
+window, reliability cutoff), the topography stage's binned spectra (the detrending's and the
+window's bias removed, the window's mode factor across neighbouring bins), ``merged_psd``,
+``measured_psd_on_grid`` / ``drawn_psd`` on the psd stage's grid (the
 bins' mean wavenumbers as knots), then A/A0 = erf(p / 2 sqrt(G)) at the top magnification at two
 pressures (p/E* = 1e-3 and 1e-2) and the mean separation u (eq 57, alpha 0.45) at p/E* = 1e-3.
 The truth is the same prediction from the true PSD on the same q grid. A band covers when its
