@@ -1,0 +1,335 @@
+"""Elastoplastic contact of rough surfaces in Persson's theory: the stress distribution with a
+penetration hardness sigma_Y, the elastic and the plastic contact areas, and their load.
+
+Persson's P(sigma, zeta) obeys the diffusion equation dP/dG = d^2P/dsigma^2 (seed eq 1 with G
+of eq 17 as "time"), starting from P(sigma, 0) = delta(sigma - p). Elastic contact alone puts
+one absorbing wall at sigma = 0 (separation), whose image solution is eq 16. A solid that
+yields where the local pressure reaches its penetration hardness sigma_Y adds a second
+absorbing wall at sigma = sigma_Y: the probability flowing out there is contact area that has
+deformed plastically and carries exactly sigma_Y (Persson, Phys. Rev. Lett. 87, 116101 (2001);
+J. Chem. Phys. 115, 3840 (2001)).
+
+With tau = G / sigma_Y^2 (dimensionless) every quantity has two exact forms:
+
+- the Fourier sine series on [0, sigma_Y], whose n-th term carries exp(-(n pi)^2 tau): fast
+  where tau is large;
+- the method of images (image charges at 2 m sigma_Y +- p), whose m-th pair carries about
+  exp(-(2|m| - 1)^2 / (4 tau)): fast where tau is small.
+
+The kernels use the series for tau >= :data:`TAU_SWITCH` = 1/pi and the images below it.
+There both neglected remainders are below exp(-(N + 1)^2 pi) and exp(-(2M + 1)^2 pi / 4)
+relative to the leading term, with N = :data:`SERIES_TERMS` = 6 terms and M =
+:data:`IMAGE_PAIRS` = 4 (m = -4 .. 4): 1e-67 and 1e-28, far below float64 rounding; deeper in
+each regime the remainders only shrink. So a fixed, small number of terms converges for every
+G from 0 to infinity (tests/test_plasticity.py checks G / sigma_Y^2 from 1e-30 to 1e30). Each
+image sum is written as differences of erfc of same-signed arguments, so that small areas keep
+their relative precision (sigma_Y -> infinity gives eq 19 to rounding).
+
+See docs/theory.md, section "Elastoplastic contact", and docs/plasticity.md.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .inputs import require_nonnegative, require_pressure
+from .special import erf, erfcx
+
+#: below this tau = G / sigma_Y^2 the method of images, at and above it the sine series
+TAU_SWITCH = 1.0 / np.pi
+#: terms n = 1 .. SERIES_TERMS of the sine series (remainder < exp(-49 pi) at tau = 1/pi)
+SERIES_TERMS = 6
+#: image pairs m = -IMAGE_PAIRS .. IMAGE_PAIRS (remainder < exp(-81 pi / 4) at tau = 1/pi)
+IMAGE_PAIRS = 4
+
+_N = np.arange(1, SERIES_TERMS + 1, dtype=float)
+_M = np.arange(-IMAGE_PAIRS, IMAGE_PAIRS + 1, dtype=float)
+
+
+def _erfc(x):
+    """erfc(x) for any real x, precise in relative terms for x >= 0 (no 1 - erf cancellation)."""
+    x = np.asarray(x, dtype=float)
+    with np.errstate(under="ignore", over="ignore", invalid="ignore"):
+        small = erfcx(np.abs(x)) * np.exp(-x * x)
+    return np.where(x >= 0, small, 2.0 - small)
+
+
+def _erf_difference(u, v):
+    """erf(u) - erf(v) without cancellation: from the tails (erfc) where u and v share a sign."""
+    u, v = np.broadcast_arrays(np.asarray(u, dtype=float), np.asarray(v, dtype=float))
+    both_pos = (u >= 0) & (v >= 0)
+    both_neg = (u < 0) & (v < 0)
+    out = erf(u) - erf(v)
+    out = np.where(both_pos, _erfc(np.where(both_pos, v, 0.0)) - _erfc(np.where(both_pos, u, 0.0)), out)
+    return np.where(both_neg, _erfc(np.where(both_neg, -u, 0.0)) - _erfc(np.where(both_neg, -v, 0.0)), out)
+
+
+def _inputs(p, G, sigma_Y):
+    p = require_pressure(p)
+    G = require_nonnegative(G, "G")
+    sigma_Y = require_pressure(sigma_Y, "sigma_Y", positive=True)
+    return np.broadcast_arrays(p, G, sigma_Y)
+
+
+def _dispatch(p, G, sigma_Y, series, images, at_zero_G, saturated):
+    """Evaluate ``series`` where tau >= TAU_SWITCH, ``images`` where 0 < tau < TAU_SWITCH,
+    ``at_zero_G`` (a function of p, sigma_Y) where G = 0, and the constant ``saturated`` where
+    p >= sigma_Y; each on its own points only, so that no point pays for both forms."""
+    p, G, sigma_Y = _inputs(p, G, sigma_Y)
+    shape = p.shape
+    p, G, sigma_Y = p.ravel(), G.ravel(), sigma_Y.ravel()
+    out = np.empty(p.shape)
+    sat = p >= sigma_Y
+    zero = (G == 0) & ~sat
+    with np.errstate(over="ignore"):
+        tau = G / sigma_Y**2
+    ser = (tau >= TAU_SWITCH) & ~sat & ~zero
+    img = ~(sat | zero | ser)
+    out[sat] = saturated
+    out[zero] = at_zero_G(p[zero], sigma_Y[zero])
+    out[ser] = series(p[ser], G[ser], sigma_Y[ser])
+    out[img] = images(p[img], G[img], sigma_Y[img])
+    return out.reshape(shape)
+
+
+# --- sine series (tau >= TAU_SWITCH) -------------------------------------------------------------
+
+def _modes(p, G, sigma_Y):
+    """k_n = n pi / sigma_Y (1/Pa), sin(k_n p) and exp(-k_n^2 G) for n = 1 .. SERIES_TERMS."""
+    k = _N * np.pi / sigma_Y[:, None]
+    with np.errstate(under="ignore"):
+        decay = np.exp(-(k * k) * G[:, None])
+    return k, np.sin(k * p[:, None]), decay
+
+
+def _elastic_area_series(p, G, sigma_Y):
+    _, s, decay = _modes(p, G, sigma_Y)
+    odd = (_N % 2 == 1) * 4.0 / (_N * np.pi)
+    return np.sum(odd * s * decay, axis=-1)
+
+
+def _elastic_load_series(p, G, sigma_Y):
+    k, s, decay = _modes(p, G, sigma_Y)
+    sign = np.where(_N % 2 == 1, 1.0, -1.0)
+    return 2.0 * np.sum(sign * s * decay / k, axis=-1)
+
+
+def _plastic_area_series(p, G, sigma_Y):
+    return (p - _elastic_load_series(p, G, sigma_Y)) / sigma_Y
+
+
+# --- method of images (0 < tau < TAU_SWITCH) ------------------------------------------------------
+
+def _charges(p, G, sigma_Y):
+    """Positive charges a_m = p + 2 m sigma_Y, negative b_m = -p + 2 m sigma_Y (Pa), and s = 2 sqrt G."""
+    shift = 2.0 * _M * sigma_Y[:, None]
+    return p[:, None] + shift, -p[:, None] + shift, 2.0 * np.sqrt(G)[:, None]
+
+
+def _elastic_area_images(p, G, sigma_Y):
+    a, b, s = _charges(p, G, sigma_Y)
+    Y = sigma_Y[:, None]
+    # int_0^Y g(sigma - c) dsigma = (erf((Y - c)/s) + erf(c/s)) / 2, summed as a_m minus b_m
+    return 0.5 * np.sum(_erf_difference(a / s, b / s) + _erf_difference((Y - a) / s, (Y - b) / s), axis=-1)
+
+
+def _in_window(c, s, Y):
+    """int_0^Y g(sigma - c) dsigma for the Gaussian g of variance s^2 / 2 centred at c."""
+    return 0.5 * _erf_difference((Y - c) / s, -c / s)
+
+
+def _elastic_load_images(p, G, sigma_Y):
+    a, b, s = _charges(p, G, sigma_Y)
+    Y = sigma_Y[:, None]
+    # int_0^Y sigma g(sigma - c) dsigma = c W(c) + sqrt(G/pi) (exp(-c^2/4G) - exp(-(Y - c)^2/4G));
+    # a W(a) - b W(b) = (a - b) W(a) + b (W(a) - W(b)) keeps the small pairs' cancellation exact
+    window_diff = 0.5 * (_erf_difference(a / s, b / s) + _erf_difference((Y - a) / s, (Y - b) / s))
+    first = (a - b) * _in_window(a, s, Y) + b * window_diff
+    with np.errstate(under="ignore"):
+        gauss = (np.exp(-(a / s) ** 2) - np.exp(-((Y - a) / s) ** 2)
+                 - np.exp(-(b / s) ** 2) + np.exp(-((Y - b) / s) ** 2))
+    return np.sum(first + 0.5 * s / np.sqrt(np.pi) * gauss, axis=-1)
+
+
+def _plastic_area_images(p, G, sigma_Y):
+    a, b, s = _charges(p, G, sigma_Y)
+    Y = sigma_Y[:, None]
+
+    def passed(x):  # int_0^G of the flux x/(2G') g(x, G') dG' through a wall at distance x
+        return 0.5 * np.sign(x) * _erfc(np.abs(x) / s)
+
+    return np.sum(passed(Y - a) - passed(Y - b), axis=-1)
+
+
+# --- public kernels -------------------------------------------------------------------------------
+
+def elastic_area_ratio(p, G, sigma_Y):
+    """Relative area of elastic contact A_el/A0 (dimensionless) with penetration hardness sigma_Y.
+
+    .. math::
+        A_{el}/A_0 = \\int_0^{\\sigma_Y} P(\\sigma, G)\\,d\\sigma
+                   = \\sum_{n\\,\\mathrm{odd}} \\frac{4}{n\\pi} \\sin(k_n p)\\, e^{-k_n^2 G},
+        \\qquad k_n = n\\pi/\\sigma_Y,
+
+    or its image form (sums of erf differences, module docstring) for G < sigma_Y^2 / pi.
+    sigma_Y -> infinity gives eq 19, erf(p / 2 sqrt G); G = 0 gives 1 (full contact);
+    p >= sigma_Y gives 0 (the nominal pressure already exceeds the hardness: every contact
+    spot is plastic).
+
+    Parameters
+    ----------
+    p : float or array
+        Nominal pressure (Pa), >= 0.
+    G : float or array
+        Persson's G (Pa^2, eq 17) at the magnification of interest, >= 0; for two rough surfaces
+        the G of their combined spectrum (eq 52-53).
+    sigma_Y : float or array
+        Penetration hardness (Pa), > 0. All three broadcast together.
+
+    Returns
+    -------
+    array
+        A_el/A0 in [0, 1].
+
+    References
+    ----------
+    Persson, Phys. Rev. Lett. 87, 116101 (2001); Persson, J. Chem. Phys. 115, 3840 (2001);
+    docs/theory.md, section "Elastoplastic contact".
+    """
+    return _dispatch(p, G, sigma_Y, _elastic_area_series, _elastic_area_images,
+                     lambda p, Y: np.where(p > 0, 1.0, 0.0), 0.0)
+
+
+def plastic_area_ratio(p, G, sigma_Y):
+    """Relative area of plastically deformed contact A_pl/A0 (dimensionless).
+
+    The probability absorbed at sigma = sigma_Y between G = 0 and G (the flux -dP/dsigma at
+    sigma_Y accumulated over the magnifications). Series form (from the load it leaves the
+    elastic spots):
+
+    .. math::
+        A_{pl}/A_0 = \\frac{1}{\\sigma_Y}\\Big[p - 2\\sum_{n\\ge1} (-1)^{n+1}
+                     \\frac{\\sin(k_n p)}{k_n} e^{-k_n^2 G}\\Big];
+
+    image form (first passage, computed from the flux itself, not from the load):
+    A_pl/A0 = sum_m [h(sigma_Y - a_m) - h(sigma_Y - b_m)], h(x) = sign(x) erfc(|x| / 2 sqrt G) / 2,
+    a_m = p + 2 m sigma_Y, b_m = -p + 2 m sigma_Y. Limits: G -> infinity gives p / sigma_Y
+    (all load carried plastically); G = 0 gives 0; p >= sigma_Y gives 1.
+
+    Parameters
+    ----------
+    p : float or array
+        Nominal pressure (Pa), >= 0.
+    G : float or array
+        Persson's G (Pa^2, eq 17), >= 0.
+    sigma_Y : float or array
+        Penetration hardness (Pa), > 0.
+
+    Returns
+    -------
+    array
+        A_pl/A0 in [0, min(1, p / sigma_Y)].
+
+    References
+    ----------
+    Persson, Phys. Rev. Lett. 87, 116101 (2001); docs/theory.md, section "Elastoplastic contact".
+    """
+    return _dispatch(p, G, sigma_Y, _plastic_area_series, _plastic_area_images,
+                     lambda p, Y: np.zeros_like(p), 1.0)
+
+
+def elastic_load(p, G, sigma_Y):
+    """Load per nominal area carried by the elastic contact spots (Pa): the first moment
+    int_0^sigma_Y sigma P(sigma, G) dsigma = (mean stress in the elastic area) x A_el/A0.
+
+    .. math::
+        \\int_0^{\\sigma_Y}\\sigma P\\,d\\sigma = 2\\sum_{n\\ge1}(-1)^{n+1}\\frac{\\sin(k_n p)}{k_n}e^{-k_n^2 G}
+
+    (image form for G < sigma_Y^2 / pi). Load balance: elastic_load + sigma_Y A_pl/A0 = p for
+    p < sigma_Y (:func:`load_residual`).
+
+    Parameters
+    ----------
+    p, G, sigma_Y : float or array
+        Nominal pressure (Pa), Persson's G (Pa^2), penetration hardness (Pa).
+
+    Returns
+    -------
+    array
+        Pa.
+
+    References
+    ----------
+    Persson, Phys. Rev. Lett. 87, 116101 (2001); docs/theory.md, section "Elastoplastic contact".
+    """
+    return _dispatch(p, G, sigma_Y, _elastic_load_series, _elastic_load_images, lambda p, Y: p, 0.0)
+
+
+def load_residual(p, G, sigma_Y):
+    """The load check (dimensionless): [elastic_load + sigma_Y A_pl/A0] / p - 1, zero for p < sigma_Y.
+
+    In the image regime (G < sigma_Y^2 / pi) the elastic load and A_pl are computed
+    independently (first moment of P; flux through sigma_Y), so the residual measures their
+    consistency; in the series regime A_pl follows from the load and the residual is zero by
+    construction. For p >= sigma_Y the interface cannot carry p (sigma_Y A0 < p A0): the
+    residual is sigma_Y / p - 1 < 0. NaN at p = 0.
+
+    Parameters
+    ----------
+    p, G, sigma_Y : float or array
+        Nominal pressure (Pa), Persson's G (Pa^2), penetration hardness (Pa).
+    """
+    p, G, sigma_Y = _inputs(p, G, sigma_Y)
+    total = elastic_load(p, G, sigma_Y) + sigma_Y * plastic_area_ratio(p, G, sigma_Y)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return total / p - 1.0
+
+
+def elastoplastic_stress_distribution(sigma, p, G, sigma_Y):
+    """Stress distribution P(sigma, G) (1/Pa) between the absorbing walls sigma = 0 and sigma_Y.
+
+    .. math::
+        P = \\frac{2}{\\sigma_Y}\\sum_{n\\ge1}\\sin(k_n p)\\sin(k_n\\sigma)e^{-k_n^2 G}
+          = \\sum_m [g(\\sigma - p - 2m\\sigma_Y) - g(\\sigma + p - 2m\\sigma_Y)],
+        \\quad g(x) = \\frac{e^{-x^2/4G}}{\\sqrt{4\\pi G}},
+
+    the series for G >= sigma_Y^2 / pi, the images below (module docstring). Zero outside
+    (0, sigma_Y) and for p >= sigma_Y; it integrates to A_el/A0. The plastic spots, at exactly
+    sigma_Y, are a delta of weight A_pl/A0 not included here. sigma_Y -> infinity gives eq 16.
+
+    Parameters
+    ----------
+    sigma : array (k,) or (..., k)
+        Local normal stress (Pa); leading axes broadcast with p, G and sigma_Y.
+    p : float or array
+        Nominal pressure (Pa), >= 0.
+    G : float or array
+        Persson's G (Pa^2), > 0.
+    sigma_Y : float or array
+        Penetration hardness (Pa), > 0.
+
+    Returns
+    -------
+    array (..., k)
+        1/Pa.
+
+    References
+    ----------
+    Persson, Phys. Rev. Lett. 87, 116101 (2001); docs/theory.md, section "Elastoplastic contact".
+    """
+    sigma = np.asarray(sigma, dtype=float)
+    p, G, sigma_Y = (x[..., None] for x in _inputs(p, G, sigma_Y))
+    if np.any(G <= 0):
+        raise ValueError("G must be > 0 for P(sigma) (G = 0 is a delta at sigma = p)")
+    tau = G / sigma_Y**2
+    with np.errstate(under="ignore"):
+        k = np.pi * _N / sigma_Y[..., None]
+        series = (2.0 / sigma_Y) * np.sum(np.sin(k * p[..., None]) * np.sin(k * sigma[..., None])
+                                          * np.exp(-(k * k) * G[..., None]), axis=-1)
+        shift = 2.0 * _M * sigma_Y[..., None]
+        x = sigma[..., None] - shift
+        four_G = 4.0 * G[..., None]
+        images = np.sum(np.exp(-((x - p[..., None]) ** 2) / four_G) - np.exp(-((x + p[..., None]) ** 2) / four_G),
+                        axis=-1) / np.sqrt(np.pi * 4.0 * G)
+    inside = (sigma > 0) & (sigma < sigma_Y) & (p < sigma_Y)
+    return np.where(inside, np.where(tau >= TAU_SWITCH, series, images), 0.0)
