@@ -326,10 +326,11 @@ def elastoplastic_stress_distribution(sigma, p, G, sigma_Y):
         k = np.pi * _N / sigma_Y[..., None]
         series = (2.0 / sigma_Y) * np.sum(np.sin(k * p[..., None]) * np.sin(k * sigma[..., None])
                                           * np.exp(-(k * k) * G[..., None]), axis=-1)
-        shift = 2.0 * _M * sigma_Y[..., None]
-        x = sigma[..., None] - shift
-        four_G = 4.0 * G[..., None]
-        images = np.sum(np.exp(-((x - p[..., None]) ** 2) / four_G) - np.exp(-((x + p[..., None]) ** 2) / four_G),
-                        axis=-1) / np.sqrt(np.pi * 4.0 * G)
+        # pair m: g(x - p) - g(x + p), x = sigma - 2 m sigma_Y, as g(x -+ p) (-expm1(-+x p / G)): no cancellation
+        x = sigma[..., None] - 2.0 * _M * sigma_Y[..., None]
+        pp, GG = p[..., None], G[..., None]
+        near = np.where(x >= 0, x - pp, x + pp)
+        pairs = np.sign(x) * np.exp(-near**2 / (4.0 * GG)) * -np.expm1(-np.abs(x) * pp / GG)
+        images = np.sum(pairs, axis=-1) / np.sqrt(np.pi * 4.0 * G)
     inside = (sigma > 0) & (sigma < sigma_Y) & (p < sigma_Y)
     return np.where(inside, np.where(tau >= TAU_SWITCH, series, images), 0.0)
