@@ -16,14 +16,17 @@ With tau = G / sigma_Y^2 (dimensionless) every quantity has two exact forms:
 - the method of images (image charges at 2 m sigma_Y +- p), whose m-th pair carries about
   exp(-(2|m| - 1)^2 / (4 tau)): fast where tau is small.
 
-The kernels use the series for tau >= :data:`TAU_SWITCH` = 1/pi and the images below it.
-There both neglected remainders are below exp(-(N + 1)^2 pi) and exp(-(2M + 1)^2 pi / 4)
-relative to the leading term, with N = :data:`SERIES_TERMS` = 6 terms and M =
-:data:`IMAGE_PAIRS` = 4 (m = -4 .. 4): 1e-67 and 1e-28, far below float64 rounding; deeper in
-each regime the remainders only shrink. So a fixed, small number of terms converges for every
-G from 0 to infinity (tests/test_plasticity.py checks G / sigma_Y^2 from 1e-30 to 1e30). Each
-image sum is written as differences of erfc of same-signed arguments, so that small areas keep
-their relative precision (sigma_Y -> infinity gives eq 19 to rounding).
+The kernels use the images for tau < :data:`TAU_SWITCH` = 0.02 and the series at and above it,
+with N = 4, 8 or 16 terms for tau >= 0.3, 0.08 or 0.02 (:data:`SERIES_BINS`): the first term
+left out is below exp(-(N + 1)^2 pi^2 tau) <= exp(-57) ~ 1e-25 of the first. Below the switch
+the image pairs m = -1, 0, 1 (:data:`IMAGE_PAIRS`) suffice: the next pairs lie at least
+2 sigma_Y outside [0, sigma_Y] and weigh exp(-1/tau) < exp(-50) ~ 1e-22. Where the wall at
+sigma_Y lies beyond :data:`FAR` = 27 diffusion lengths 2 sqrt(G) of p (every image term below
+1e-300), the one-wall solution (eqs 16, 19) is returned, as exact. So a fixed, small number of
+terms converges for every G from 0 to infinity (tests/test_plasticity.py checks G / sigma_Y^2
+from 1e-30 to 1e30, and that doubling the terms changes nothing). Each image sum is written as
+differences of erfc of same-signed arguments, so that small areas keep their relative precision
+(sigma_Y -> infinity gives eq 19 to rounding).
 
 See docs/theory.md, section "Elastoplastic contact", and docs/plasticity.md.
 """
@@ -32,36 +35,43 @@ from __future__ import annotations
 
 import numpy as np
 
+from .contact import contact_area_ratio
 from .inputs import require_nonnegative, require_pressure
-from .special import erf, erfcx
+from .special import erf, ndtr
 
 #: below this tau = G / sigma_Y^2 the method of images, at and above it the sine series
-TAU_SWITCH = 1.0 / np.pi
-#: terms n = 1 .. SERIES_TERMS of the sine series (remainder < exp(-49 pi) at tau = 1/pi)
-SERIES_TERMS = 6
-#: image pairs m = -IMAGE_PAIRS .. IMAGE_PAIRS (remainder < exp(-81 pi / 4) at tau = 1/pi)
-IMAGE_PAIRS = 4
+TAU_SWITCH = 0.02
+#: the sine series' terms n = 1 .. N for tau at or above each bound: exp(-(N + 1)^2 pi^2 tau) < 1e-18
+#: at the bound (the next term's size relative to the first)
+SERIES_BINS = ((0.3, 4), (0.08, 8), (TAU_SWITCH, 16))
+#: the largest number of series terms
+SERIES_TERMS = 16
+#: image pairs m = -IMAGE_PAIRS .. IMAGE_PAIRS (the next pairs weigh exp(-1 / tau) < 1e-21 below TAU_SWITCH)
+IMAGE_PAIRS = 1
+#: where (sigma_Y - p) / (2 sqrt G) exceeds this, erfc of it underflows (< 1e-300): the wall at sigma_Y
+#: is out of reach and the one-wall solution (eqs 16, 19) is exact in float64
+FAR = 27.0
 
 _N = np.arange(1, SERIES_TERMS + 1, dtype=float)
 _M = np.arange(-IMAGE_PAIRS, IMAGE_PAIRS + 1, dtype=float)
 
 
 def _erfc(x):
-    """erfc(x) for any real x, precise in relative terms for x >= 0 (no 1 - erf cancellation)."""
-    x = np.asarray(x, dtype=float)
-    with np.errstate(under="ignore", over="ignore", invalid="ignore"):
-        small = erfcx(np.abs(x)) * np.exp(-x * x)
-    return np.where(x >= 0, small, 2.0 - small)
+    """erfc(x) for any real x, precise in relative terms for x >= 0 (from the normal tail, ndtr)."""
+    return 2.0 * ndtr(-np.sqrt(2.0) * np.asarray(x, dtype=float))
 
 
 def _erf_difference(u, v):
-    """erf(u) - erf(v) without cancellation: from the tails (erfc) where u and v share a sign."""
+    """erf(u) - erf(v) without cancellation: from the tails (erfc) where u and v share a sign,
+    from erf where they do not (then no cancellation: the two have opposite signs)."""
     u, v = np.broadcast_arrays(np.asarray(u, dtype=float), np.asarray(v, dtype=float))
-    both_pos = (u >= 0) & (v >= 0)
-    both_neg = (u < 0) & (v < 0)
-    out = erf(u) - erf(v)
-    out = np.where(both_pos, _erfc(np.where(both_pos, v, 0.0)) - _erfc(np.where(both_pos, u, 0.0)), out)
-    return np.where(both_neg, _erfc(np.where(both_neg, -u, 0.0)) - _erfc(np.where(both_neg, -v, 0.0)), out)
+    flip = (u < 0) & (v < 0)  # erf(u) - erf(v) = erf(-v) - erf(-u)
+    u, v = np.where(flip, -v, u), np.where(flip, -u, v)
+    out = _erfc(v) - _erfc(u)
+    mixed = (u < 0) | (v < 0)
+    if np.any(mixed):
+        out[mixed] = erf(u[mixed]) - erf(v[mixed])
+    return out
 
 
 def _inputs(p, G, sigma_Y):
@@ -71,51 +81,56 @@ def _inputs(p, G, sigma_Y):
     return np.broadcast_arrays(p, G, sigma_Y)
 
 
-def _dispatch(p, G, sigma_Y, series, images, at_zero_G, saturated):
-    """Evaluate ``series`` where tau >= TAU_SWITCH, ``images`` where 0 < tau < TAU_SWITCH,
-    ``at_zero_G`` (a function of p, sigma_Y) where G = 0, and the constant ``saturated`` where
-    p >= sigma_Y; each on its own points only, so that no point pays for both forms."""
+def _dispatch(p, G, sigma_Y, series, images, one_wall, saturated):
+    """Evaluate each point in its regime, on its points only (no point pays for two forms):
+    ``saturated`` (a constant) where p >= sigma_Y; ``one_wall(p, G)`` (the elastic solution, G = 0
+    included) where the wall at sigma_Y is out of float64 reach; ``images`` where tau < TAU_SWITCH;
+    ``series(p, G, sigma_Y, N)`` with the N terms of :data:`SERIES_BINS` above."""
     p, G, sigma_Y = _inputs(p, G, sigma_Y)
     shape = p.shape
     p, G, sigma_Y = p.ravel(), G.ravel(), sigma_Y.ravel()
     out = np.empty(p.shape)
     sat = p >= sigma_Y
-    zero = (G == 0) & ~sat
-    with np.errstate(over="ignore"):
+    with np.errstate(over="ignore", divide="ignore"):
         tau = G / sigma_Y**2
-    ser = (tau >= TAU_SWITCH) & ~sat & ~zero
-    img = ~(sat | zero | ser)
+        far = ~sat & ((sigma_Y - p) > FAR * 2.0 * np.sqrt(G))
     out[sat] = saturated
-    out[zero] = at_zero_G(p[zero], sigma_Y[zero])
-    out[ser] = series(p[ser], G[ser], sigma_Y[ser])
+    out[far] = one_wall(p[far], G[far])
+    img = ~(sat | far) & (tau < TAU_SWITCH)
     out[img] = images(p[img], G[img], sigma_Y[img])
+    done = sat | far | img
+    for bound, terms in SERIES_BINS:
+        here = ~done & (tau >= bound)
+        out[here] = series(p[here], G[here], sigma_Y[here], terms)
+        done |= here
     return out.reshape(shape)
 
 
 # --- sine series (tau >= TAU_SWITCH) -------------------------------------------------------------
 
-def _modes(p, G, sigma_Y):
-    """k_n = n pi / sigma_Y (1/Pa), sin(k_n p) and exp(-k_n^2 G) for n = 1 .. SERIES_TERMS."""
-    k = _N * np.pi / sigma_Y[:, None]
+def _modes(p, G, sigma_Y, terms):
+    """k_n = n pi / sigma_Y (1/Pa), sin(k_n p) and exp(-k_n^2 G) for n = 1 .. terms."""
+    n = _N[:terms]
+    k = n * np.pi / sigma_Y[:, None]
     with np.errstate(under="ignore"):
         decay = np.exp(-(k * k) * G[:, None])
-    return k, np.sin(k * p[:, None]), decay
+    return n, k, np.sin(k * p[:, None]), decay
 
 
-def _elastic_area_series(p, G, sigma_Y):
-    _, s, decay = _modes(p, G, sigma_Y)
-    odd = (_N % 2 == 1) * 4.0 / (_N * np.pi)
+def _elastic_area_series(p, G, sigma_Y, terms=SERIES_TERMS):
+    n, _, s, decay = _modes(p, G, sigma_Y, terms)
+    odd = (n % 2 == 1) * 4.0 / (n * np.pi)
     return np.sum(odd * s * decay, axis=-1)
 
 
-def _elastic_load_series(p, G, sigma_Y):
-    k, s, decay = _modes(p, G, sigma_Y)
-    sign = np.where(_N % 2 == 1, 1.0, -1.0)
+def _elastic_load_series(p, G, sigma_Y, terms=SERIES_TERMS):
+    n, k, s, decay = _modes(p, G, sigma_Y, terms)
+    sign = np.where(n % 2 == 1, 1.0, -1.0)
     return 2.0 * np.sum(sign * s * decay / k, axis=-1)
 
 
-def _plastic_area_series(p, G, sigma_Y):
-    return (p - _elastic_load_series(p, G, sigma_Y)) / sigma_Y
+def _plastic_area_series(p, G, sigma_Y, terms=SERIES_TERMS):
+    return (p - _elastic_load_series(p, G, sigma_Y, terms)) / sigma_Y
 
 
 # --- method of images (0 < tau < TAU_SWITCH) ------------------------------------------------------
@@ -171,7 +186,7 @@ def elastic_area_ratio(p, G, sigma_Y):
                    = \\sum_{n\\,\\mathrm{odd}} \\frac{4}{n\\pi} \\sin(k_n p)\\, e^{-k_n^2 G},
         \\qquad k_n = n\\pi/\\sigma_Y,
 
-    or its image form (sums of erf differences, module docstring) for G < sigma_Y^2 / pi.
+    or its image form (sums of erf differences, module docstring) for G < 0.02 sigma_Y^2.
     sigma_Y -> infinity gives eq 19, erf(p / 2 sqrt G); G = 0 gives 1 (full contact);
     p >= sigma_Y gives 0 (the nominal pressure already exceeds the hardness: every contact
     spot is plastic).
@@ -196,8 +211,7 @@ def elastic_area_ratio(p, G, sigma_Y):
     Persson, Phys. Rev. Lett. 87, 116101 (2001); Persson, J. Chem. Phys. 115, 3840 (2001);
     docs/theory.md, section "Elastoplastic contact".
     """
-    return _dispatch(p, G, sigma_Y, _elastic_area_series, _elastic_area_images,
-                     lambda p, Y: np.where(p > 0, 1.0, 0.0), 0.0)
+    return _dispatch(p, G, sigma_Y, _elastic_area_series, _elastic_area_images, contact_area_ratio, 0.0)
 
 
 def plastic_area_ratio(p, G, sigma_Y):
@@ -234,8 +248,7 @@ def plastic_area_ratio(p, G, sigma_Y):
     ----------
     Persson, Phys. Rev. Lett. 87, 116101 (2001); docs/theory.md, section "Elastoplastic contact".
     """
-    return _dispatch(p, G, sigma_Y, _plastic_area_series, _plastic_area_images,
-                     lambda p, Y: np.zeros_like(p), 1.0)
+    return _dispatch(p, G, sigma_Y, _plastic_area_series, _plastic_area_images, lambda p, G: np.zeros_like(p), 1.0)
 
 
 def elastic_load(p, G, sigma_Y):
@@ -245,7 +258,7 @@ def elastic_load(p, G, sigma_Y):
     .. math::
         \\int_0^{\\sigma_Y}\\sigma P\\,d\\sigma = 2\\sum_{n\\ge1}(-1)^{n+1}\\frac{\\sin(k_n p)}{k_n}e^{-k_n^2 G}
 
-    (image form for G < sigma_Y^2 / pi). Load balance: elastic_load + sigma_Y A_pl/A0 = p for
+    (image form for G < 0.02 sigma_Y^2). Load balance: elastic_load + sigma_Y A_pl/A0 = p for
     p < sigma_Y (:func:`load_residual`).
 
     Parameters
@@ -262,13 +275,13 @@ def elastic_load(p, G, sigma_Y):
     ----------
     Persson, Phys. Rev. Lett. 87, 116101 (2001); docs/theory.md, section "Elastoplastic contact".
     """
-    return _dispatch(p, G, sigma_Y, _elastic_load_series, _elastic_load_images, lambda p, Y: p, 0.0)
+    return _dispatch(p, G, sigma_Y, _elastic_load_series, _elastic_load_images, lambda p, G: p, 0.0)
 
 
 def load_residual(p, G, sigma_Y):
     """The load check (dimensionless): [elastic_load + sigma_Y A_pl/A0] / p - 1, zero for p < sigma_Y.
 
-    In the image regime (G < sigma_Y^2 / pi) the elastic load and A_pl are computed
+    In the image regime (G < 0.02 sigma_Y^2) the elastic load and A_pl are computed
     independently (first moment of P; flux through sigma_Y), so the residual measures their
     consistency; in the series regime A_pl follows from the load and the residual is zero by
     construction. For p >= sigma_Y the interface cannot carry p (sigma_Y A0 < p A0): the
@@ -293,7 +306,7 @@ def elastoplastic_stress_distribution(sigma, p, G, sigma_Y):
           = \\sum_m [g(\\sigma - p - 2m\\sigma_Y) - g(\\sigma + p - 2m\\sigma_Y)],
         \\quad g(x) = \\frac{e^{-x^2/4G}}{\\sqrt{4\\pi G}},
 
-    the series for G >= sigma_Y^2 / pi, the images below (module docstring). Zero outside
+    the series (16 terms) for G >= 0.02 sigma_Y^2, the images (m = -1, 0, 1) below (module docstring). Zero outside
     (0, sigma_Y) and for p >= sigma_Y; it integrates to A_el/A0. The plastic spots, at exactly
     sigma_Y, are a delta of weight A_pl/A0 not included here. sigma_Y -> infinity gives eq 16.
 

@@ -8,6 +8,7 @@ import numpy as np
 from roughcontact.stage import UserError
 
 from .common import (
+    CASE_STYLES,
     at_zeta,
     band_level,
     band_note,
@@ -145,7 +146,8 @@ def figure_elastoplastic_area(results):
     fig, axes = plt.subplots(1, len(zetas), figsize=(3.9 * len(zetas) + 1.0, 4.4), layout="constrained",
                              sharey=True, squeeze=False)
     notes, cases = set(), curve_cases(results, "contact")
-    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    spare = iter(["C1", "C4", "C5", "C6", "C8", "C9"] * 3)  # other coherences: one colour each
+    colours = [case.style["color"] if case.label in CASE_STYLES else next(spare) for case in cases]
     for ax, zeta in zip(axes[0], zetas, strict=True):
         p = None
         for i, case in enumerate(cases):
@@ -153,7 +155,7 @@ def figure_elastoplastic_area(results):
             notes.add(note)
             ds = nominal(ds)
             p = np.atleast_1d(ds["p"].values)
-            colour = colours[i % len(colours)]
+            colour = colours[i]
             ax.plot(p / 1e6, ds["elastic_contact_area_ratio"].values, color=colour, lw=1.8,
                     label=f"A_el / A0, {case.label}")
             ax.plot(p / 1e6, ds["plastic_contact_area_ratio"].values, color=colour, lw=1.8, ls="--",
