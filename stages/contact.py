@@ -17,7 +17,7 @@ import xarray as xr
 
 from roughcontact.physics.contact import contact_area_ratio, persson_G, stress_distribution_adaptive
 from roughcontact.physics.corrections import CORRECTIONS, corrected_G
-from roughcontact.physics.plasticity import elastic_area_ratio, plastic_area_ratio
+from roughcontact.physics.plasticity import elastoplastic_areas
 from roughcontact.stage import (
     Figure,
     Param,
@@ -70,11 +70,13 @@ def compute_contact(inp: StageInput) -> xr.Dataset:
         ds["stress_distribution"] = dist
         ds["stress_distribution_mass"] = mass
         ds = ds.assign_coords(stress_level=level, sigma=sigma)
-    for name, kernel in zip(PLASTIC, (elastic_area_ratio, plastic_area_ratio), strict=True):
-        if name in inp.wanted:
-            ds[name] = xr.apply_ufunc(kernel, p, G, inp["contact.yield_stress"], dask="parallelized",
-                                      output_dtypes=[float])
-            ds[name].attrs = {"yield_stress_Pa": float(inp["contact.yield_stress"])}
+    if set(PLASTIC) & inp.wanted:
+        areas = xr.apply_ufunc(elastoplastic_areas, p, G, inp["contact.yield_stress"], dask="parallelized",
+                               output_core_dims=[[], []], output_dtypes=[float, float])
+        for name, area in zip(PLASTIC, areas, strict=True):
+            if name in inp.wanted:
+                ds[name] = area
+                ds[name].attrs = {"yield_stress_Pa": float(inp["contact.yield_stress"])}
     return ds
 
 

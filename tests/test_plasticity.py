@@ -216,3 +216,12 @@ def test_pressure_above_the_hardness_is_warned_about(run_scene, tmp_path):
                         outdir=tmp_path / "a")["base"]["contact"]
     over = res["p"] >= 2e9
     assert np.all(res["plastic_contact_area_ratio"].where(over).fillna(1.0) == 1.0)
+
+
+def test_the_joint_kernel_gives_the_same_areas():
+    """elastoplastic_areas (what the stage calls) is elastic_area_ratio and plastic_area_ratio at once."""
+    p = np.linspace(0.0, 1.2, 49)[:, None] * Y
+    G = np.geomspace(1e-12, 1e4, 61)[None, :] * Y**2
+    a_el, a_pl = pl.elastoplastic_areas(p, G, Y)
+    np.testing.assert_allclose(a_el, pl.elastic_area_ratio(p, G, Y), rtol=1e-14, atol=1e-300)
+    np.testing.assert_allclose(a_pl, pl.plastic_area_ratio(p, G, Y), rtol=1e-14, atol=1e-300)
