@@ -167,11 +167,11 @@ STAGE = register(
                                   "at numerics.sigma_points >= 401 and sigma_width >= 8 (the defaults); a coarser grid "
                                   "shows here how much of the distribution it misses"}),
             "elastic_contact_area_ratio": Var(
-                "1", "elastic contact area A_el/A0", optional=True, tolerance=1e-4,
+                "1", "elastic contact area A_el/A0", optional=True,
                 attrs={"comment": "Persson's theory with absorbing walls at sigma = 0 and sigma = contact.yield_stress "
                                   "(docs/plasticity.md): contact spots below the penetration hardness"}),
             "plastic_contact_area_ratio": Var(
-                "1", "plastic contact area A_pl/A0", optional=True, tolerance=1e-4,
+                "1", "plastic contact area A_pl/A0", optional=True,
                 attrs={"comment": "contact spots at the penetration hardness (the flux through sigma = "
                                   "contact.yield_stress accumulated over zeta); elastic load + yield_stress "
                                   "A_pl/A0 = p (docs/plasticity.md)"}),
