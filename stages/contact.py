@@ -1,22 +1,37 @@
 """Stage ``contact``: G(zeta), the relative contact area A/A0(p, zeta, eta) and, when asked
-for, the stress distribution P(sigma; p, zeta, eta).
+for, the stress distribution P(sigma; p, zeta, eta) and, with a penetration hardness
+(``contact.yield_stress``), the elastic and plastic contact areas.
 
-Kernels: :mod:`roughcontact.physics.contact` (seed eqs 16-19, 53). Figures:
-:mod:`roughcontact.stages.figures.contact` (seed Figs 3 and 4).
+Kernels: :mod:`roughcontact.physics.contact` (seed eqs 16-19, 53) and
+:mod:`roughcontact.physics.plasticity` (absorbing wall at sigma_Y). Figures:
+:mod:`roughcontact.stages.figures.contact` (seed Figs 3 and 4; elastic and plastic areas).
 """
 
 from __future__ import annotations
 
 import dataclasses
+import warnings
 
 import numpy as np
 import xarray as xr
 
 from roughcontact.physics.contact import contact_area_ratio, persson_G, stress_distribution_adaptive
 from roughcontact.physics.corrections import CORRECTIONS, corrected_G
-from roughcontact.stage import Figure, Param, Shape, Stage, StageInput, Var, register, register_params
+from roughcontact.physics.plasticity import elastoplastic_areas
+from roughcontact.stage import (
+    Figure,
+    Param,
+    SceneWarning,
+    Shape,
+    Stage,
+    StageInput,
+    UserError,
+    Var,
+    register,
+    register_params,
+)
 
-from .figures.contact import figure_contact_area, figure_stress_distribution
+from .figures.contact import figure_contact_area, figure_elastoplastic_area, figure_stress_distribution
 from .shared.grid import Q_REFERENCE
 from .shared.magnification import CORRECTION_KEYS, area_correction, zeta_shape, zeta_values
 from .shared.material import E_STAR, MATERIAL_KEYS, e_star
@@ -55,7 +70,18 @@ def compute_contact(inp: StageInput) -> xr.Dataset:
         ds["stress_distribution"] = dist
         ds["stress_distribution_mass"] = mass
         ds = ds.assign_coords(stress_level=level, sigma=sigma)
+    if set(PLASTIC) & inp.wanted:
+        areas = xr.apply_ufunc(elastoplastic_areas, p, G, inp["contact.yield_stress"], dask="parallelized",
+                               output_core_dims=[[], []], output_dtypes=[float, float])
+        for name, area in zip(PLASTIC, areas, strict=True):
+            if name in inp.wanted:
+                ds[name] = area
+                ds[name].attrs = {"yield_stress_Pa": float(inp["contact.yield_stress"])}
     return ds
+
+
+#: the outputs of elastoplastic contact (contact.yield_stress)
+PLASTIC = ("elastic_contact_area_ratio", "plastic_contact_area_ratio")
 
 
 def _corrected(inp: StageInput, p: xr.DataArray, G: xr.DataArray) -> xr.DataArray:
@@ -76,8 +102,26 @@ def _correction_attrs(inp: StageInput) -> dict:
 
 
 def check_contact(inp: StageInput) -> None:
-    """A correction's gamma that makes S(A/A0) <= 0 is refused."""
-    area_correction(inp)
+    """A correction's gamma that makes S(A/A0) <= 0 is refused; so are the elastoplastic areas
+    without a yield stress or with a corrected theory (the absorbing wall at sigma_Y is solved
+    for eq 17's G only). Pressures at or above the yield stress are warned about."""
+    name, _ = area_correction(inp)
+    yield_stress = inp["contact.yield_stress"]
+    asked = sorted(set(PLASTIC) & inp.wanted)
+    if asked and yield_stress is None:
+        raise UserError(f"{asked[0]} needs a penetration hardness: set [contact] yield_stress (e.g. \"1.5 GPa\")",
+                        key="contact.yield_stress")
+    if yield_stress is None:
+        return
+    if name != "persson":
+        raise UserError(f"contact.yield_stress works with contact.correction = \"persson\" only (the absorbing wall "
+                        f"at sigma_Y is solved for eq 17's G), not \"{name}\"", key="contact.correction")
+    p_max = float(np.max(np.asarray(inp["load.p"], dtype=float)))
+    if p_max >= yield_stress:
+        warnings.warn(SceneWarning(
+            f"load.p reaches {p_max:.4g} Pa, at or above contact.yield_stress = {yield_stress:.4g} Pa: there the "
+            "interface cannot carry the load (A_pl/A0 = 1, A_el/A0 = 0 are written; the solid yields as a whole)"),
+            stacklevel=2)
 
 
 def describe_contact(inp: StageInput) -> Shape:
@@ -91,6 +135,7 @@ def describe_contact(inp: StageInput) -> Shape:
     work = {"temporaries": 8 * (inp["numerics.sigma_points"] if stress else 2),
             **({"q": inp.upstream["psd"].sizes["q"]} if isinstance(inp["contact.zeta"], str) else {})}
     lacks = {"G": ("p", "stress_level"), "contact_area_ratio": ("stress_level",),
+             **{name: ("stress_level",) for name in PLASTIC},
              "E_star": ("p", "zeta", "stress_level"), "qL": ("p", "zeta", "stress_level")}
     if not stress:
         return dataclasses.replace(zeta, work=work, lacks=lacks, coupled=("zeta",))
@@ -103,11 +148,11 @@ def describe_contact(inp: StageInput) -> Shape:
 STAGE = register(
     Stage(
         name="contact",
-        version="3",
+        version="3",  # contact.yield_stress (default none) adds optional outputs only
         compute=compute_contact,
         needs=("psd",),
         reads=(*MATERIAL_KEYS, "load.p", "contact.zeta", "numerics.sigma_points", "numerics.sigma_width",
-                *CORRECTION_KEYS),
+                *CORRECTION_KEYS, "contact.yield_stress"),
         outputs={
             "G": Var("Pa^2", "Persson's G(zeta) = (pi/4) E*^2 int_qL^(zeta qL) q^3 C dq (eq 17)"),
             "contact_area_ratio": Var("1", "relative contact area A/A0 = erf(p / 2 sqrt G) (eq 19; with "
@@ -121,6 +166,15 @@ STAGE = register(
                 attrs={"comment": "stored with stress_distribution; equals contact_area_ratio within 1e-3 (relative) "
                                   "at numerics.sigma_points >= 401 and sigma_width >= 8 (the defaults); a coarser grid "
                                   "shows here how much of the distribution it misses"}),
+            "elastic_contact_area_ratio": Var(
+                "1", "elastic contact area A_el/A0", optional=True,
+                attrs={"comment": "Persson's theory with absorbing walls at sigma = 0 and sigma = contact.yield_stress "
+                                  "(docs/plasticity.md): contact spots below the penetration hardness"}),
+            "plastic_contact_area_ratio": Var(
+                "1", "plastic contact area A_pl/A0", optional=True,
+                attrs={"comment": "contact spots at the penetration hardness (the flux through sigma = "
+                                  "contact.yield_stress accumulated over zeta); elastic load + yield_stress "
+                                  "A_pl/A0 = p (docs/plasticity.md)"}),
         },
         coords={
             "sigma": Var("Pa", "local normal stress sigma at each node of the stress grid"),
@@ -131,6 +185,8 @@ STAGE = register(
             Figure("fig3_contact_area", "A/A0 against p/E* (seed Fig. 3)", ("contact",), figure_contact_area),
             Figure("fig4_stress_distribution", "P(sigma) (seed Fig. 4)", ("contact",), figure_stress_distribution,
                    outputs=("stress_distribution",)),
+            Figure("elastoplastic_area", "A_el/A0 and A_pl/A0 against p", ("contact",), figure_elastoplastic_area,
+                   outputs=PLASTIC),
         ),
         check=check_contact,
         describe=describe_contact,

@@ -8,6 +8,7 @@ import numpy as np
 from roughcontact.stage import UserError
 
 from .common import (
+    CASE_STYLES,
     at_zeta,
     band_level,
     band_note,
@@ -118,4 +119,58 @@ def figure_stress_distribution(results):
     note = band_note(results, base)
     fig.suptitle(f"Stress distribution (seed Fig. 4) at {scope_text(results, zeta)}"
                  + (f"\n{note}" if note else ""), fontsize=10)
+    return legend_outside(fig, list(axes[0]), below=True)
+
+
+
+def _plastic_zetas(ds) -> list:
+    """The magnifications of the elastoplastic figure: all of them up to three (the smallest,
+    a middle one and the largest of more), or [None] without zeta."""
+    if "zeta" not in ds.coords:
+        return [None]
+    values = np.atleast_1d(ds["zeta"].values)
+    picks = values if values.size <= 3 else values[[0, values.size // 2, -1]]
+    return [float(z) for z in picks]
+
+
+def figure_elastoplastic_area(results):
+    """A_el/A0 (solid) and A_pl/A0 (dashed) against p, one panel per magnification (up to three:
+    Persson's picture of contact that looks elastic at low magnification and has yielded at
+    high), one colour per case; beside them the elastic solid's A/A0 (eq 19, dotted) and the
+    limit p / sigma_Y that A_pl reaches when every asperity has yielded."""
+    import matplotlib.pyplot as plt
+
+    base = results["base"]["contact"]
+    Y = float(base["plastic_contact_area_ratio"].attrs["yield_stress_Pa"])
+    zetas = _plastic_zetas(base)
+    fig, axes = plt.subplots(1, len(zetas), figsize=(3.9 * len(zetas) + 1.0, 4.4), layout="constrained",
+                             sharey=True, squeeze=False)
+    notes, cases = set(), curve_cases(results, "contact")
+    spare = iter(["C1", "C4", "C5", "C6", "C8", "C9"] * 3)  # other coherences: one colour each
+    colours = [case.style["color"] if case.label in CASE_STYLES else next(spare) for case in cases]
+    for ax, zeta in zip(axes[0], zetas, strict=True):
+        p = None
+        for i, case in enumerate(cases):
+            ds, note = reduce_dims(at_zeta(case.ds, zeta), ("p",), "plastic_contact_area_ratio")
+            notes.add(note)
+            ds = nominal(ds)
+            p = np.atleast_1d(ds["p"].values)
+            colour = colours[i]
+            ax.plot(p / 1e6, ds["elastic_contact_area_ratio"].values, color=colour, lw=1.8,
+                    label=f"A_el / A0, {case.label}")
+            ax.plot(p / 1e6, ds["plastic_contact_area_ratio"].values, color=colour, lw=1.8, ls="--",
+                    label=f"A_pl / A0, {case.label}")
+            ax.plot(p / 1e6, ds["contact_area_ratio"].values, color=colour, lw=0.9, ls=":",
+                    label=f"A / A0 elastic solid (eq 19), {case.label}")
+        ax.plot(p / 1e6, np.minimum(p / Y, 1.0), color="0.4", lw=1.0, ls="-.", label="p / sigma_Y (all yielded)")
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_ylim(1e-5, 1.5)
+        ax.set_xlabel("nominal pressure p (MPa)")
+        ax.grid(alpha=0.3, which="both", lw=0.4)
+        ax.set_title(zeta_text(zeta, q_reference(results)).replace(" (q up", "\n(q up"), fontsize=9)
+    axes[0][0].set_ylabel("relative contact area")
+    extra = "; ".join(sorted(n for n in notes if n))
+    fig.suptitle(f"Elastic (solid) and plastic (dashed) contact area, penetration hardness sigma_Y = "
+                 f"{Y / 1e9:.3g} GPa" + (f"\n{extra}" if extra else ""), fontsize=10)
     return legend_outside(fig, list(axes[0]), below=True)

@@ -1,6 +1,6 @@
-"""The magnifications asked for (``[contact] zeta``) and the contact-area theory
-(``contact.correction``): the zeta values on the q grid, their checks against the surfaces'
-bands, and the correction's gamma."""
+"""The magnifications asked for (``[contact] zeta``), the contact-area theory
+(``contact.correction``) and the penetration hardness (``contact.yield_stress``): the zeta
+values on the q grid, their checks against the surfaces' bands, and the correction's gamma."""
 
 from __future__ import annotations
 
@@ -36,6 +36,14 @@ register_params(
           doc="gamma of the correction (default: the published value, 0.45 yang_persson, 5/9 wang_mueser)"),
 )
 CORRECTION_KEYS = ("contact.correction", "contact.gamma")
+#: the penetration hardness of elastoplastic contact (docs/plasticity.md); read by contact
+register_params(
+    "contact",
+    Param("yield_stress", "quantity", "Pa", default=None, lo=0.0, lo_open=True,
+          doc="penetration hardness sigma_Y of the softer solid: contact spots whose stress reaches it yield "
+              "(absorbing wall at sigma_Y); adds elastic_contact_area_ratio and plastic_contact_area_ratio. "
+              "Default: none (elastic contact)"),
+)
 
 
 def area_correction(inp) -> tuple[str, float | None]:
