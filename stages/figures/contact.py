@@ -19,10 +19,12 @@ from .common import (
     line_with_band,
     nominal,
     pick_zeta,
+    q_reference,
     reduce_dims,
     scope_text,
     selected_etas,
     shade,
+    zeta_text,
 )
 
 
