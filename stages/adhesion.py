@@ -333,7 +333,8 @@ STAGE = register(
                                        attrs={"comment": "F = 1 + (sqrt(pi) xi/2) erfcx(1/xi), eq 11"}),
             "delta_gamma": Var("J/m^2", "interfacial binding energy Delta_gamma",
                                attrs={"comment": "of flat surfaces"}),
-            "adhesion_length": Var("m", "adhesion length delta", attrs={"comment": "delta = 4 Delta_gamma / E*, eq 14"}),
+            "adhesion_length": Var("m", "adhesion length delta",
+                                   attrs={"comment": "delta = 4 Delta_gamma / E*, eq 14"}),
             "hrms_substrate_vanishing": Var("m", "substrate rms roughness for vanishing adhesion",
                                             attrs={"comment": "the substrate rms roughness at which adhesion "
                                                               "vanishes: gamma_eff(1) and A/A0 reach 0 together; root "

@@ -259,7 +259,8 @@ STAGE = register(
             "psd_combined": Var("m^4", "combined power spectral density C(q) of the pair"),
             "hrms_combined": Var("m", "rms roughness of the combined surface",
                                  attrs={"comment": "from the combined PSD"}),
-            "rms_slope_combined": Var("1", "rms slope of the combined surface", attrs={"comment": "from the combined PSD"}),
+            "rms_slope_combined": Var("1", "rms slope of the combined surface",
+                                      attrs={"comment": "from the combined PSD"}),
             "psd_substrate_error": Var("m^4", "standard error of C1",
                                        attrs={"comment": "statistical standard error of C1 on the grid; 0 where C1 is "
                                                          "analytic or no errors are known"}),
