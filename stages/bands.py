@@ -42,14 +42,22 @@ BANDED = (
 )
 SOURCE = {f"{var}_band": (st, var) for st, names in BANDED for var in names}
 ALWAYS = ("psd_combined_band",)
-_COMMENT = ("quantiles over the dimension draw (standard_name realization) of the upstream variable's draws 1..N; "
-            "the coordinate quantile gives the probability levels (CF 1.11 has no cell method for quantiles)")
+#: the band's own label where "<the source's label> (band)" would be too long for a label
+_LABELS = {"psd_combined": "combined PSD C(q) (band)", "contact_area_ratio": "relative contact area A/A0 (band)",
+           "G": "G(zeta) (band)", "stress_distribution": "stress distribution P(sigma) (band)",
+           "hrms_substrate_vanishing": "substrate hrms for vanishing adhesion (band)"}
+_COMMENT = "the coordinate quantile gives the probability levels (CF 1.11 has no cell method for quantiles)"
 
 
 def _band_var(st: Stage, var: str) -> Var:
+    """The band of ``var`` of stage ``st``: a short label, and in the comment what it is a band of (the
+    source's label and comment)."""
     source = st.outputs[var]
-    return Var(source.units, f"quantiles over the spectrum draws of: {source.long_name}",
-               optional=f"{var}_band" not in ALWAYS, attrs={"comment": _COMMENT})
+    about = "; ".join(filter(None, (source.long_name, source.attrs.get("comment"))))
+    comment = (f"quantiles over the dimension draw (standard_name realization) of the draws 1..N of {st.name}.{var} "
+               f"({about}); {_COMMENT}")
+    return Var(source.units, _LABELS.get(var, f"{source.long_name} (band)"),
+               optional=f"{var}_band" not in ALWAYS, attrs={"comment": comment})
 
 
 def _needs() -> tuple:
@@ -125,7 +133,8 @@ register(
         check=check_bands,
         reads=("bands.draws", "bands.level"),
         outputs={name: _band_var(st, var) for name, (st, var) in SOURCE.items()},
-        coords={"quantile": Var("1", "probability level of the quantile over the spectrum draws"),
+        coords={"quantile": Var("1", "probability level of the quantile",
+                                attrs={"comment": "quantile over the spectrum draws"}),
                 **CONTACT.coords, **ADHESION.coords},
         figures=(
             Figure("bands_psd", "Combined PSD with its uncertainty band", ("bands",), figure_band_psd),

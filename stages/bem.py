@@ -38,7 +38,7 @@ from .figures.bem import figure_bem_comparison, figure_bem_reduced_pressure
 from .shared.maps import check_eta, map_band, map_surfaces, measured_maps, topography_files
 from .shared.material import E_STAR, MATERIAL_KEYS, e_star
 from .shared.surfaces import MAP_KEYS, surface_reads
-from .shared.variants import VARIANT_KEYS, VARIANTS, theory_variants, variant_attrs
+from .shared.variants import THEORY, VARIANT_KEYS, VARIANTS, theory_variants, variant_attrs
 
 #: the optional dependency and how to install it (named in the error without it)
 EXTRA = 'pip install "roughcontact[bem]"'
@@ -376,15 +376,20 @@ def _with_variants(inp, ds, psd, q, zeta_bem, p_values, has_eta, E_star) -> xr.D
     return ds
 
 
+#: the coordinate realization of the stages that solve BEM maps
+REALIZATION = Var("1", "realization (surface pair)", attrs={"comment": "index of the surface pair: random pairs; a "
+                                                                      "single 0 for the measured maps"})
+
 _BAND_NAMES = {
-    "bem_zeta": "magnification resolved by the BEM map, q_cut / qL (the theory is read there)",
-    "bem_q_cut": "highest wavenumber of the roughness in the BEM map",
-    "bem_system_size": "side of the periodic map, 2 pi / qL",
-    "bem_pixel_size": "pixel size of the map",
-    "bem_grid": "pixels per side of the map",
+    "bem_zeta": ("magnification zeta of the BEM map", "the magnification resolved by the BEM map, q_cut / qL (the "
+                 "theory is read there)"),
+    "bem_q_cut": ("cut-off wavenumber q_cut of the BEM map", "highest wavenumber of the roughness in the BEM map"),
+    "bem_system_size": ("side of the periodic map, 2 pi / qL", None),
+    "bem_pixel_size": ("pixel size of the map", None),
+    "bem_grid": ("pixels per side of the map", None),
 }
 _BAND_UNITS = {"bem_zeta": "1", "bem_q_cut": "1/m", "bem_system_size": "m", "bem_pixel_size": "m", "bem_grid": "1"}
-_THEORY = "(at the BEM's magnification bem_zeta)"
+_THEORY = "at the BEM's magnification bem_zeta"
 
 register(
     Stage(
@@ -401,44 +406,59 @@ register(
                "numerics.bem_tolerance", "numerics.bem_stress_bins", "numerics.sigma_width", *VARIANT_KEYS),
         files=(topography_files("substrate"), topography_files("solid")),
         outputs={
-            "bem_contact_area_ratio": Var("1", "relative contact area A/A0 from the BEM (fraction of pixels in "
-                                               "contact), per realization"),
-            "bem_mean_gap": Var("m", "mean interfacial separation (map average of the gap) from the BEM, per "
-                                     "realization"),
-            "bem_stress_histogram": Var("1/Pa", "BEM density of the local contact pressure (integrates to A/A0 "
-                                                "within the bins)"),
-            "bem_stress_overflow": Var("1", "fraction of the map in contact at pressures beyond the last histogram "
-                                            "bin"),
-            "bem_hrms_combined": Var("m", "rms height of the composite h1 - h2 (synthesized or measured: attribute "
-                                          "bem_surfaces) in the BEM band"),
-            "bem_rms_slope_combined": Var("1", "rms slope of the composite h1 - h2 (synthesized or measured: attribute "
-                                               "bem_surfaces) in the BEM band"),
+            "bem_contact_area_ratio": Var("1", "relative contact area A/A0, BEM",
+                                          attrs={"comment": "fraction of pixels in contact, per realization"}),
+            "bem_mean_gap": Var("m", "mean interfacial separation u, BEM",
+                                attrs={"comment": "map average of the gap, per realization"}),
+            "bem_stress_histogram": Var("1/Pa", "contact pressure density P(sigma), BEM",
+                                        attrs={"comment": "BEM density of the local contact pressure (integrates to "
+                                                          "A/A0 within the bins)"}),
+            "bem_stress_overflow": Var("1", "contact area beyond the last bin, BEM",
+                                       attrs={"comment": "fraction of the map in contact at pressures beyond the "
+                                                         "last histogram bin"}),
+            "bem_hrms_combined": Var("m", "rms height of h1 - h2 in the BEM band",
+                                     attrs={"comment": "of the composite h1 - h2, synthesized or measured (attribute "
+                                                       "bem_surfaces)"}),
+            "bem_rms_slope_combined": Var("1", "rms slope of h1 - h2 in the BEM band",
+                                          attrs={"comment": "of the composite h1 - h2, synthesized or measured "
+                                                            "(attribute bem_surfaces)"}),
             "bem_contact_area_ratio_mean": Var("1", "BEM relative contact area, mean over realizations"),
-            "bem_contact_area_ratio_std": Var("1", "BEM relative contact area, standard deviation over realizations "
-                                                   "(0: a single realization)"),
-            "bem_mean_gap_mean": Var("m", "BEM mean interfacial separation, mean over realizations"),
-            "bem_mean_gap_std": Var("m", "BEM mean interfacial separation, standard deviation over realizations "
-                                         "(0: a single realization)"),
-            "theory_contact_area_ratio": Var("1", "A/A0 of the contact stage (eq 19, or contact.correction) "
-                                                  f"{_THEORY}"),
-            "theory_mean_separation": Var("m", f"mean separation of the separation stage (eq 57, with "
-                                               f"separation.refinement) {_THEORY}"),
-            "theory_variant_contact_area_ratio": Var("1", f"A/A0 of each theory variant (coordinate theory) {_THEORY}"),
-            "theory_variant_mean_separation": Var("m", f"mean separation of each theory variant {_THEORY}"),
-            "area_ratio_variant_to_bem": Var("1", "theory / BEM ratio of the relative contact area, per variant"),
-            "separation_ratio_variant_to_bem": Var("1", "theory / BEM ratio of the mean separation, per variant"),
-            "area_ratio_theory_to_bem": Var("1", "theory / BEM ratio of the relative contact area (same band)"),
-            "separation_ratio_theory_to_bem": Var("1", "theory / BEM ratio of the mean separation (same band; NaN "
-                                                       "where both are 0)"),
-            **{k: Var(_BAND_UNITS[k], text) for k, text in _BAND_NAMES.items()},
+            "bem_contact_area_ratio_std": Var("1", "BEM relative contact area, std over realizations",
+                                              attrs={"comment": "standard deviation over realizations; 0 for a single "
+                                                                "realization"}),
+            "bem_mean_gap_mean": Var("m", "BEM mean separation, mean over realizations"),
+            "bem_mean_gap_std": Var("m", "BEM mean separation, std over realizations",
+                                    attrs={"comment": "standard deviation over realizations; 0 for a single "
+                                                      "realization"}),
+            "theory_contact_area_ratio": Var("1", "relative contact area A/A0, theory",
+                                             attrs={"comment": "A/A0 of the contact stage (eq 19, or "
+                                                               f"contact.correction) {_THEORY}"}),
+            "theory_mean_separation": Var("m", "mean interfacial separation u, theory",
+                                          attrs={"comment": "mean separation of the separation stage (eq 57, with "
+                                                            f"separation.refinement) {_THEORY}"}),
+            "theory_variant_contact_area_ratio": Var("1", "A/A0 of each theory variant",
+                                                     attrs={"comment": f"coordinate theory; {_THEORY}"}),
+            "theory_variant_mean_separation": Var("m", "mean separation of each theory variant",
+                                                  attrs={"comment": _THEORY}),
+            "area_ratio_variant_to_bem": Var("1", "A/A0 ratio theory / BEM, per variant"),
+            "separation_ratio_variant_to_bem": Var("1", "mean separation ratio theory / BEM, per variant"),
+            "area_ratio_theory_to_bem": Var("1", "A/A0 ratio theory / BEM",
+                                            attrs={"comment": "relative contact area, theory and BEM on the same "
+                                                              "band"}),
+            "separation_ratio_theory_to_bem": Var("1", "mean separation ratio theory / BEM",
+                                                  attrs={"comment": "theory and BEM on the same band; NaN where both "
+                                                                    "are 0"}),
+            **{k: Var(_BAND_UNITS[k], label, attrs={"comment": comment} if comment else {})
+               for k, (label, comment) in _BAND_NAMES.items()},
             "E_star": E_STAR,
         },
         coords={
-            "realization": Var("1", "index of the surface pair (random pairs; a single 0: the measured maps)"),
-            "theory": Var("1", "theory variant: persson (eq 19, eq 57), yang_persson, wang_mueser "
-                               "(attribute theory_variants)"),
-            "bem_stress_level": Var("1", "histogram bin centre, sigma / (p + sigma_width sqrt(G))"),
-            "bem_sigma": Var("Pa", "local contact pressure at each histogram bin centre"),
+            "realization": REALIZATION,
+            "theory": THEORY,
+            "bem_stress_level": Var("1", "histogram bin centre sigma/sigma_max",
+                                    attrs={"comment": "sigma / sigma_max, sigma_max = p + sigma_width sqrt(G)"}),
+            "bem_sigma": Var("Pa", "contact pressure at the bin centre",
+                             attrs={"comment": "local contact pressure at each histogram bin centre"}),
         },
         figures=(Figure("bem_comparison", "theory vs BEM: A/A0, mean separation and their ratios",
                         ("bem",), figure_bem_comparison),

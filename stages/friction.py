@@ -267,11 +267,13 @@ STAGE = register(
         reads=(*CORRECTION_KEYS, "load.p", "material.nu", "friction.v", "friction.correction", "friction.gamma",
                 "numerics.friction_phi_nodes", "numerics.friction_segment_nodes") + FLASH_KEYS + SHEAR_KEYS,
         outputs={
-            "friction_coefficient": Var("1", "friction coefficient mu (eq 61, + shear term if on)", tolerance=1e-4),
-            "sliding_contact_area_ratio": Var("1", "relative contact area while sliding A/A0 = P(q1) (eqs 31, 62)",
-                                              tolerance=1e-4),
-            "sliding_G": Var("1", "G(q; v) of eq 62 (corrected: |E|^2, upper limit q), sigma0^2 absorbed",
-                             optional=True),
+            "friction_coefficient": Var("1", "friction coefficient mu", tolerance=1e-4,
+                                        attrs={"comment": "eq 61, plus the contact shear term with friction.shear"}),
+            "sliding_contact_area_ratio": Var("1", "relative contact area A/A0, sliding", tolerance=1e-4,
+                                              attrs={"comment": "A/A0 = P(q1) while sliding; eqs 31, 62"}),
+            "sliding_G": Var("1", "G(q, v) while sliding", optional=True,
+                             attrs={"comment": "G(q; v) of eq 62 (corrected: |E|^2, upper limit q), sigma0^2 "
+                                               "absorbed"}),
             "friction_density": Var("1", "contribution to mu per unit ln q, d mu / d ln q", optional=True),
             **FLASH_OUTPUTS,
             **SHEAR_OUTPUTS,

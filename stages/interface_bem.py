@@ -22,7 +22,7 @@ from roughcontact.physics.leakage import BRUGGEMAN_AREA, leak_rate, leakage_kern
 from roughcontact.physics.reynolds import flow_factors, percolates
 from roughcontact.stage import Figure, Param, Stage, StageInput, Var, register, register_params
 
-from .bem import bem_band, bem_eta_values, check_bem, describe_bem, map_pairs, single_surfaces, solve_pair
+from .bem import REALIZATION, bem_band, bem_eta_values, check_bem, describe_bem, map_pairs, single_surfaces, solve_pair
 from .figures.interface_bem import figure_interface_bem
 from .leakage import NUMERICS as LEAKAGE_NUMERICS, SEAL_KEYS, leakage_settings, leakage_theory_attrs, seal_parameters
 from .separation import check_separation
@@ -203,16 +203,21 @@ register(
         outputs={
             "exact_contact_area_ratio": Var("1", "BEM relative contact area at p, per realization"),
             "exact_mean_gap": Var("m", "BEM mean gap at p, per realization"),
-            "exact_stiffness": Var("Pa/m", "BEM contact stiffness -dp/du (central difference over p exp(+-step))"),
+            "exact_stiffness": Var("Pa/m", "BEM contact stiffness -dp/du",
+                                   attrs={"comment": "central difference over p exp(+-step)"}),
             "exact_stiffness_mean": Var("Pa/m", "BEM contact stiffness, mean over realizations"),
-            "exact_stiffness_std": Var("Pa/m", "BEM contact stiffness, standard deviation over realizations"),
-            "exact_flow_factor": Var("m^3", "effective flow factor of the BEM gap map (Reynolds equation; mean "
-                                            "of the flows along the two axes)"),
+            "exact_stiffness_std": Var("Pa/m", "BEM contact stiffness, std over realizations",
+                                       attrs={"comment": "standard deviation over realizations"}),
+            "exact_flow_factor": Var("m^3", "effective flow factor of the BEM gap map",
+                                     attrs={"comment": "Reynolds equation; mean of the flows along the two axes"}),
             "exact_flow_factor_mean": Var("m^3", "exact flow factor, mean over realizations"),
-            "exact_flow_factor_std": Var("m^3", "exact flow factor, standard deviation over realizations"),
-            "exact_leak_rate": Var("m^3/s", "leak rate of the seal from the exact flow factor (mean)"),
-            "exact_sealing_pressure": Var("Pa", "load at which the BEM's open area stops percolating along both "
-                                                "axes (flow stops)", attrs={"nan_reason": _NAN}),
+            "exact_flow_factor_std": Var("m^3", "exact flow factor, std over realizations",
+                                         attrs={"comment": "standard deviation over realizations"}),
+            "exact_leak_rate": Var("m^3/s", "leak rate of the seal, exact flow factor",
+                                   attrs={"comment": "from the mean exact flow factor"}),
+            "exact_sealing_pressure": Var("Pa", "sealing pressure, BEM",
+                                          attrs={"comment": "load at which the BEM's open area stops percolating "
+                                                            "along both axes (flow stops)", "nan_reason": _NAN}),
             "exact_percolation_area": Var("1", "BEM contact area at the sealing pressure", attrs={"nan_reason": _NAN}),
             "theory_stiffness": Var("Pa/m", "contact stiffness of the theory on the BEM band"),
             "theory_leak_rate_critical_junction": Var("m^3/s", "critical-junction leak rate on the BEM band"),
@@ -227,7 +232,7 @@ register(
                                                    attrs={"nan_reason": "NaN where both are +inf (full contact)"}),
             "E_star": E_STAR,
         },
-        coords={"realization": Var("1", "index of the surface pair (random pairs; a single 0: the measured maps)")},
+        coords={"realization": REALIZATION},
         figures=(Figure("interface_bem", "theory vs exact: leak rate and contact stiffness on the BEM's gap",
                         ("interface_bem",), figure_interface_bem),),
         doc="Exact check on the BEM gap maps: Reynolds leak rate, sealing load and stiffness against the theory.",

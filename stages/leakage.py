@@ -142,21 +142,28 @@ register(
         needs=("psd",),
         reads=(*MATERIAL_KEYS, "load.p", *SEPARATION_KEYS, *SEAL_KEYS, "leakage.percolation_area", *NUMERICS),
         outputs={
-            "leak_rate_critical_junction": Var("m^3/s", "leak rate of the seal, critical-junction theory "
-                                                        "(Persson & Yang 2008)", attrs={"formula": FLOW + "u1^3"},
-                                               tolerance=1e-4),
-            "leak_rate_effective_medium": Var("m^3/s", "leak rate of the seal, effective-medium theory "
-                                                       "(Lorenz & Persson 2010)",
-                                              attrs={"formula": FLOW + "Bruggeman", "comment": GAP_DISTRIBUTION}),
-            "flow_factor_critical_junction": Var("m^3", "effective flow factor u1^3 of the critical junction"),
+            "leak_rate_critical_junction": Var("m^3/s", "leak rate, critical-junction theory", tolerance=1e-4,
+                                               attrs={"formula": FLOW + "u1^3",
+                                                      "comment": "leak rate of the seal (Persson & Yang 2008)"}),
+            "leak_rate_effective_medium": Var("m^3/s", "leak rate, effective-medium theory",
+                                              attrs={"formula": FLOW + "Bruggeman",
+                                                     "comment": "leak rate of the seal (Lorenz & Persson 2010); "
+                                                                + GAP_DISTRIBUTION}),
+            "flow_factor_critical_junction": Var("m^3", "flow factor u1^3 of the critical junction",
+                                                 attrs={"comment": "effective flow factor"}),
             "flow_factor_effective_medium": Var("m^3", "Bruggeman's 2D effective flow factor sigma"),
-            "critical_magnification": Var("1", "magnification zeta_c at which the non-contact area percolates, "
-                                               "A(zeta_c)/A0 = leakage.percolation_area"),
-            "critical_gap": Var("m", "separation u1(zeta_c) of the critical constriction"),
-            "sealing_pressure_critical_junction": Var("Pa", "nominal pressure above which the critical-junction "
-                                                            "theory has no open path (A(q_max)/A0 = percolation_area)"),
-            "sealing_pressure_effective_medium": Var("Pa", "nominal pressure above which Bruggeman's medium does not "
-                                                           "conduct (A(q_max)/A0 = 1/2)"),
+            "critical_magnification": Var("1", "critical magnification zeta_c",
+                                          attrs={"comment": "magnification at which the non-contact area "
+                                                            "percolates, A(zeta_c)/A0 = leakage.percolation_area"}),
+            "critical_gap": Var("m", "critical gap u1(zeta_c)",
+                                attrs={"comment": "separation of the critical constriction"}),
+            "sealing_pressure_critical_junction": Var("Pa", "sealing pressure, critical-junction theory",
+                                                      attrs={"comment": "nominal pressure above which the "
+                                                                        "critical-junction theory has no open path "
+                                                                        "(A(q_max)/A0 = percolation_area)"}),
+            "sealing_pressure_effective_medium": Var("Pa", "sealing pressure, effective-medium theory",
+                                                     attrs={"comment": "nominal pressure above which Bruggeman's "
+                                                                       "medium does not conduct (A(q_max)/A0 = 1/2)"}),
         },
         figures=(Figure("leakage", "leak rate of the seal against the contact pressure", ("leakage",),
                         figure_leakage),),

@@ -238,10 +238,13 @@ def compute_topography(inp: StageInput) -> xr.Dataset:
 
 
 
-def _empty(surface: str) -> dict:
-    """The comment on a per-bin variable: what its NaN mean (said in the file, for readers of it)."""
-    return {"comment": f"NaN in the bins that hold no Fourier mode of the {surface}'s maps (below their lowest or "
-                       "above their highest wavenumber, or between the modes of a small map)"}
+def _empty(surface: str, about: str = "") -> dict:
+    """The comment on a per-bin variable: ``about`` it, then what its NaN mean (said in the file, for
+    readers of it)."""
+    return {"comment": f"{about}{'; ' if about else ''}NaN in the bins that hold no Fourier mode of the {surface}'s "
+                       "maps (below their lowest or above their highest wavenumber, or between the modes of a small "
+                       "map)"}
+
 
 register(
     Stage(
@@ -255,22 +258,27 @@ register(
         files=(topography_files("substrate"), topography_files("solid"), container_files("substrate"),
                container_files("solid")),
         outputs={
-            **{f"psd_{s}_measured": Var("m^4", f"measured PSD of the {s} (Persson convention)", attrs=_empty(s))
+            **{f"psd_{s}_measured": Var("m^4", f"measured PSD of the {s}", attrs=_empty(s, "Persson convention"))
                for s in SURFACES},
-            **{f"psd_{s}_measured_error": Var("m^4", f"statistical standard error of the measured PSD of the {s}",
-                                              attrs=_empty(s)) for s in SURFACES},
-            **{f"q_{s}_measured": Var("1/m", f"mean wavenumber of the {s}'s Fourier modes in the bin", attrs=_empty(s))
+            **{f"psd_{s}_measured_error": Var("m^4", f"standard error of the {s}'s measured PSD",
+                                              attrs=_empty(s, "statistical standard error")) for s in SURFACES},
+            **{f"q_{s}_measured": Var("1/m", f"mean wavenumber of the {s}'s modes",
+                                      attrs=_empty(s, f"mean wavenumber of the {s}'s Fourier modes in the bin"))
                for s in SURFACES},
-            **{f"modes_{s}": Var("1", f"independent Fourier modes of the {s} in the bin (a window's correlations "
-                                      "counted)") for s in SURFACES},
-            **{f"psd_{s}_measured_spread": Var("1", f"Birge ratio sqrt(chi^2/(k-1)) of the spread between the {s}'s "
-                                              "k files in the bin (about 1 when they agree within their errors)",
-                                                  attrs=_empty(s)) for s in SURFACES},
-            "cross_psd_measured": Var("m^4", "measured cross-spectrum Re C12 of the pair (Persson convention)",
-                                      attrs=_empty("pair")),
-            "coherence": Var("1", "measured coherence eta(q) = Re C12 / sqrt(C11 C22) (eq 41)", attrs=_empty("pair")),
-            "coherence_error": Var("1", "statistical standard error of the coherence, (1 - eta^2) / sqrt(2 n)",
-                                   attrs=_empty("pair")),
+            **{f"modes_{s}": Var("1", f"independent Fourier modes of the {s}",
+                                 attrs={"comment": f"independent Fourier modes of the {s} in the bin (a window's "
+                                                   "correlations counted)"}) for s in SURFACES},
+            **{f"psd_{s}_measured_spread": Var("1", f"Birge ratio of the {s}'s files",
+                                               attrs=_empty(s, f"Birge ratio sqrt(chi^2/(k-1)) of the spread between "
+                                                               f"the {s}'s k files in the bin (about 1 when they "
+                                                               "agree within their errors)")) for s in SURFACES},
+            "cross_psd_measured": Var("m^4", "measured cross-spectrum Re C12 of the pair",
+                                      attrs=_empty("pair", "Persson convention")),
+            "coherence": Var("1", "measured coherence eta(q)",
+                             attrs=_empty("pair", "eta(q) = Re C12 / sqrt(C11 C22), eq 41")),
+            "coherence_error": Var("1", "standard error of the coherence",
+                                   attrs=_empty("pair", "statistical standard error of the coherence, "
+                                                        "(1 - eta^2) / sqrt(2 n)")),
         },
         coords={"q_bin": Var("1/m", "wavenumber (geometric bin centre)")},
         figures=(

@@ -28,7 +28,7 @@ from roughcontact.physics.validation import (
 from roughcontact.stage import StageInput, Var
 
 from .material import e_star
-from .variants import theory_variants, variant_attrs
+from .variants import THEORY, theory_variants, variant_attrs
 
 #: the ranges of the deviation table: (name, what, lower and upper BEM A/A0)
 RANGES = (("area_0.005_0.3", "area", 0.005, 0.3), ("area_0.3_0.9", "area", 0.3, 0.9),
@@ -37,32 +37,49 @@ RANGES = (("area_0.005_0.3", "area", 0.005, 0.3), ("area_0.3_0.9", "area", 0.3, 
 CASE = ("hurst", "bandwidth", "eta")
 
 TABLE_COORDS = {
-    "theory": Var("1", "theory variant: persson (eq 19, eq 57), yang_persson, wang_mueser (attribute theory_variants)"),
-    "range": Var("1", "range of the deviation table: the quantity and the BEM A/A0 interval it covers"),
-    "lattice_kind": Var("1", "PSD on the BEM lattice: point (sampled at |k|) or cell (averaged over the mode's cell)"),
+    "theory": THEORY,
+    "range": Var("1", "range of the deviation table",
+                 attrs={"comment": "the quantity and the BEM A/A0 interval it covers"}),
+    "lattice_kind": Var("1", "PSD sampling on the BEM lattice",
+                        attrs={"comment": "point (sampled at |k|) or cell (averaged over the mode's cell)"}),
 }
-_BEM = "BEM reference (extrapolated to zero pixel size; mean over realizations)"
+_MEAN = "mean over realizations"
+_IN_RANGE = "over every case and load in the range"
 OUTPUTS = {
-    "validation_bem_area": Var("1", f"A/A0, {_BEM}"),
-    "validation_bem_area_error": Var("1", "error bar of the BEM A/A0: realization standard error and half the "
-                                          "extrapolation step, in quadrature"),
-    "validation_bem_area_finest": Var("1", "BEM A/A0 on the finest solved rung (mean over realizations)"),
-    "validation_bem_gap": Var("m", "BEM mean separation on the finest solved rung (mean over realizations)"),
-    "validation_bem_gap_error": Var("m", "error bar of the BEM mean separation: realization standard error and the "
-                                         "change over the last refinement, in quadrature"),
-    "validation_theory_area": Var("1", "A/A0 of each theory variant on the case's spectrum"),
-    "validation_theory_gap": Var("m", "mean separation of each theory variant on the case's spectrum"),
+    "validation_bem_area": Var("1", "BEM reference A/A0",
+                               attrs={"comment": f"BEM reference, extrapolated to zero pixel size; {_MEAN}"}),
+    "validation_bem_area_error": Var("1", "error bar of the BEM A/A0",
+                                     attrs={"comment": "realization standard error and half the extrapolation step, "
+                                                       "in quadrature"}),
+    "validation_bem_area_finest": Var("1", "BEM A/A0 on the finest rung",
+                                      attrs={"comment": f"on the finest solved rung; {_MEAN}"}),
+    "validation_bem_gap": Var("m", "BEM mean separation on the finest rung",
+                              attrs={"comment": f"on the finest solved rung; {_MEAN}"}),
+    "validation_bem_gap_error": Var("m", "error bar of the BEM mean separation",
+                                    attrs={"comment": "realization standard error and the change over the last "
+                                                      "refinement, in quadrature"}),
+    "validation_theory_area": Var("1", "A/A0 of each theory variant", attrs={"comment": "on the case's spectrum"}),
+    "validation_theory_gap": Var("m", "mean separation of each theory variant",
+                                 attrs={"comment": "on the case's spectrum"}),
     "validation_area_ratio": Var("1", "theory / BEM ratio of A/A0 per variant"),
-    "validation_gap_ratio": Var("1", "theory / BEM ratio of the mean separation per variant"),
+    "validation_gap_ratio": Var("1", "theory / BEM ratio of the separation",
+                                attrs={"comment": "of the mean separation, per variant"}),
     "validation_kappa_bem": Var("1", "kappa = (A/A0) E* g / p of the BEM"),
     "validation_kappa_theory": Var("1", "kappa = (A/A0) E* g / p of each theory variant"),
-    "validation_rms_slope": Var("1", "rms slope g of the case's combined spectrum on its band"),
-    "validation_deviation_max": Var("1", "largest |theory / BEM - 1| over every case and load in the range"),
-    "validation_deviation_mean": Var("1", "mean of theory / BEM - 1 over every case and load in the range"),
-    "validation_deviation_case_max": Var("1", "largest |theory / BEM - 1| per case over the loads in the range"),
-    "validation_bem_error_max": Var("1", "largest relative error bar of the BEM reference in the range"),
-    "validation_lattice_variance_ratio": Var("1", "hrms^2 the BEM lattice holds / the continuum integral of the band"),
-    "validation_lattice_slope_ratio": Var("1", "g^2 the BEM lattice holds / the continuum integral of the band"),
+    "validation_rms_slope": Var("1", "rms slope g of the case's spectrum",
+                                attrs={"comment": "of the case's combined spectrum on its band"}),
+    "validation_deviation_max": Var("1", "largest |theory / BEM - 1| in the range", attrs={"comment": _IN_RANGE}),
+    "validation_deviation_mean": Var("1", "mean of theory / BEM - 1 in the range", attrs={"comment": _IN_RANGE}),
+    "validation_deviation_case_max": Var("1", "largest |theory / BEM - 1| per case",
+                                         attrs={"comment": "over the loads in the range"}),
+    "validation_bem_error_max": Var("1", "largest relative BEM error bar in the range",
+                                    attrs={"comment": "relative error bar of the BEM reference"}),
+    "validation_lattice_variance_ratio": Var("1", "lattice / continuum hrms^2 of the band",
+                                             attrs={"comment": "hrms^2 the BEM lattice holds / the continuum "
+                                                               "integral of the band"}),
+    "validation_lattice_slope_ratio": Var("1", "lattice / continuum g^2 of the band",
+                                          attrs={"comment": "g^2 the BEM lattice holds / the continuum integral of "
+                                                            "the band"}),
 }
 
 

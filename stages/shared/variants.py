@@ -12,12 +12,17 @@ from __future__ import annotations
 import numpy as np
 
 from roughcontact.physics.corrections import DEFAULT_GAMMA, VARIANTS, variant_theory
+from roughcontact.stage import Var
 
 from .magnification import CORRECTION_KEYS, area_correction
 
 #: the scene keys the variants read (a stage that calls :func:`theory_variants` lists them)
 VARIANT_KEYS = (*CORRECTION_KEYS, "separation.alpha", "numerics.separation_panels_per_decade",
                 "numerics.separation_gauss_points", "numerics.separation_depth")
+
+#: the coordinate ``theory`` of the stages that set the variants side by side
+THEORY = Var("1", "theory variant", attrs={"comment": "persson (eq 19, eq 57), yang_persson, wang_mueser; each "
+                                                      "described in the attribute theory_variants"})
 
 #: a short description per variant (the ``theory`` coordinate's values)
 DESCRIPTIONS = {
