@@ -162,8 +162,9 @@ def estimate(plan, scene, spanned: dict[str, int], own, in_flight: int, lazy: fr
     return Estimate(plan.label, plan.path, result, working, dims, parallel)
 
 
-def check(estimates: list[Estimate], outdir: Path) -> None:
-    """Refuse a plan whose results exceed the output disk or one of whose blocks exceeds memory."""
+def check(estimates: list[Estimate], outdir: Path | None) -> None:
+    """Refuse a plan whose results exceed the output disk (``outdir`` None: the memory, where they
+    are then held) or one of whose blocks exceeds memory."""
     memory = available_memory()
     for e in estimates:
         if e.working > memory:
@@ -175,6 +176,16 @@ def check(estimates: list[Estimate], outdir: Path) -> None:
                 f"{', '.join(keys) or 'the sizes'} (chunking bounds the memory of sweeps, not of a single point)",
                 key=keys[0].split(" ")[0] if keys else None)
     total = sum(e.result for e in estimates)
+    if outdir is None and total > memory:
+        big = max(estimates, key=lambda e: e.result)
+        keys = big.keys()
+        raise UserError(
+            f"the results would take about {human(total)} of memory ({big.label}: {human(big.result)}, "
+            f"{big.describe()}) but this machine has {human(memory)} available: reduce "
+            f"{', '.join(keys) or 'the sweeps'} or write them to files (run)",
+            key=keys[0].split(" ")[0] if keys else None)
+    if outdir is None:
+        return
     free = free_disk(outdir)
     if total > free:
         big = max(estimates, key=lambda e: e.result)
