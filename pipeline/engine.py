@@ -274,7 +274,7 @@ def run(scene: Scene, outdir: Path, targets: Iterable[str] | None = None, force:
     run on the same folder waits for it (at most ``lock_timeout`` seconds, None: until it ends).
     ``verify``: check the checksums of reused results of every size (see :func:`plan`).
     """
-    from .compute import scheduler as open_scheduler
+    from .scheduling import scheduler as open_scheduler
 
     scene, outdir, targets, force = preflight.arguments(scene, outdir, targets, force)
     report = report or Reporter()
@@ -302,7 +302,7 @@ def _prepared(scene, outdir, targets, force, report, verify=None):
 def _computed(p: StagePlan, scene: Scene, upstream, files: dict, shape: Shape, report: Reporter) -> xr.Dataset:
     """One stage's result for plan ``p``: its compute on its keys, files and upstream results,
     checked against its describe (:func:`conforms`), stamped with units and provenance (:func:`_finish`)."""
-    from .compute import chunk_sweeps
+    from .scheduling import chunk_sweeps
 
     chunks = sizing.stage_chunks(scene, p.stage, p.wanted, shape)
     inp = StageInput(
@@ -363,7 +363,7 @@ def compute(scene: Scene, targets: Iterable[str] | None = None, report: Reporter
     :func:`run`, so the same numbers; but nothing stored is reused and no file is written or
     removed. Upstream results are handed downstream as computed (loaded, as :func:`run` hands
     every result up to 256 MB)."""
-    from .compute import scheduler as open_scheduler
+    from .scheduling import scheduler as open_scheduler
 
     scene = preflight.arguments(scene, IN_MEMORY, targets, ())[0]
     report = report or Reporter()
@@ -382,7 +382,7 @@ def compute(scene: Scene, targets: Iterable[str] | None = None, report: Reporter
 
 def _loaded(ds: xr.Dataset, compute_with) -> xr.Dataset:
     """``ds`` with its dask-backed variables computed by ``compute_with`` (what
-    :func:`roughcontact.compute.scheduler` yields: a scheduler name, a process pool or a client)."""
+    :func:`roughcontact.scheduling.scheduler` yields: a scheduler name, a process pool or a client)."""
     from concurrent.futures import Executor
 
     if not any(v.chunks is not None for v in ds.variables.values()):

@@ -118,7 +118,7 @@ def stage_chunks(scene, st, wanted, shape) -> dict[str, int]:
     """Chunk sizes for the stage's sweep dimensions: the scene's explicit ones, the others chosen
     so that a chunk's working memory (:func:`point_bytes` of the stage's shape) stays near
     chunk_mb; the dimensions the computation couples are never chunked."""
-    from .compute import auto_chunks
+    from .scheduling import auto_chunks
 
     sizes = scene.sweep_sizes()
     per_point = point_bytes(shape, len(outputs_asked(st, wanted)), sizes)

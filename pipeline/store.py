@@ -144,7 +144,7 @@ def write(ds: xr.Dataset, path: Path, compute_with="threads", progress=None, com
     """Write ``ds`` to ``path`` atomically: a temporary file in the same folder, then a rename.
 
     Dask-backed variables are computed block by block by ``compute_with`` (a dask scheduler
-    name or a distributed Client) and written from this process (:func:`pipeline.compute.write_blocks`),
+    name or a distributed Client) and written from this process (:func:`roughcontact.scheduling.write_blocks`),
     so a result never has to fit in memory (``progress``: a :class:`roughcontact.progress.Reporter`
     showing the blocks written; ``compress``: large variables zlib-compressed, :mod:`roughcontact.cf`).
     A crash or kill while writing leaves at most a
@@ -153,7 +153,7 @@ def write(ds: xr.Dataset, path: Path, compute_with="threads", progress=None, com
     that cannot be written (full disk, no permission) is an :class:`OutputError` naming it, raised
     after its temporary is removed.
     """
-    from .compute import dask_variables, write_blocks
+    from .scheduling import dask_variables, write_blocks
 
     path = Path(path)
     tmp = None
