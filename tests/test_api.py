@@ -45,6 +45,13 @@ def test_the_api_page_example_runs_and_returns_datasets(tmp_path, monkeypatch, c
     assert namespace["ds"].attrs["stage_name"] == "contact"
     assert (tmp_path / "outputs" / "api-example" / "contact.nc").is_file()
     assert (tmp_path / "api-example.png").stat().st_size > 10_000
+    # the eta sweep in memory: the area grows with the coherence at every load, to full contact at eta = +1
+    by_eta = namespace["by_eta"]
+    assert by_eta.sizes["eta"] == 11 and not (tmp_path / "outputs" / "eta-sweep").exists()
+    assert np.all(np.diff(by_eta.transpose("p", "eta").values, axis=1) >= 0)  # A saturates at 1 at high loads
+    assert np.all(np.diff(by_eta.sel(p=slice(None, 1e8)).transpose("p", "eta").values, axis=1) > 0)
+    np.testing.assert_allclose(by_eta.sel(eta=1.0).values, 1.0)
+    assert (tmp_path / "api-eta-sweep.png").stat().st_size > 10_000
 
 
 def test_progress_goes_to_stderr_only(tmp_path, capsys):
