@@ -11,7 +11,9 @@ dimensionless scalars (0-d variables such as ``E_star``) get a one-row table of 
   first, then the header row, then the rows; numbers are written in Python's shortest round-trip
   form, so reading them back gives the NetCDF values bit for bit.
 * xlsx: one workbook per stage, one sheet per table and a ``provenance`` sheet (through pandas and
-  openpyxl: ``pip install roughcontact[export]``).
+  openpyxl: ``pip install roughcontact[export]``). openpyxl writes a number with 16 significant
+  digits (Excel shows 15), so a value read back from a sheet can differ from the NetCDF one in
+  its last bits (relative 5e-16 at most); the CSV tables are the exact ones.
 
 Everything that can be refused (an unknown format or variable, a table folder that is a file, a
 table too long for a sheet) is refused before anything is computed or written; each file is
@@ -20,10 +22,8 @@ written to a temporary beside it and renamed, so a table is there whole or not a
 
 from __future__ import annotations
 
-import contextlib
 import csv
 import os
-import threading
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Iterable
@@ -133,42 +133,13 @@ def write_xlsx(tables_: list[Table], pairs: list[tuple[str, str]], path: Path) -
         rows += [(key if i == 0 else f"{key} (continued)", piece) for i, piece in enumerate(pieces)]
 
     def write(fh):
-        with _exact_floats(), pd.ExcelWriter(fh, engine="openpyxl") as xl:
+        with pd.ExcelWriter(fh, engine="openpyxl") as xl:
             for table in tables_:
                 frame = pd.DataFrame({h: c for h, c in zip(table.header(), table.columns.values(), strict=True)})
                 frame.to_excel(xl, sheet_name=_sheet(table.name), index=False, inf_rep="inf")
             pd.DataFrame(rows, columns=["attribute", "value"]).to_excel(xl, sheet_name="provenance", index=False)
 
     _atomic(path, write, text=False)
-
-
-_PATCH = threading.Lock()
-
-
-@contextlib.contextmanager
-def _exact_floats():
-    """openpyxl writes a float with 16 significant digits ("%.16g"), which can change its last
-    bit; while a workbook is written, floats are written in Python's shortest round-trip form
-    instead (17 digits where needed, as Excel itself saves them), so a sheet gives the NetCDF
-    numbers back exactly (tests/test_export.py checks it)."""
-    from openpyxl.cell import _writer
-
-    original = getattr(_writer, "safe_string", None)
-    if original is None:  # another openpyxl: its own formatting (the test says if it loses bits)
-        yield
-        return
-
-    def exact(value):
-        if isinstance(value, (float, np.floating)) and np.isfinite(value):
-            return repr(float(value))
-        return original(value)
-
-    with _PATCH:
-        _writer.safe_string = exact
-        try:
-            yield
-        finally:
-            _writer.safe_string = original
 
 
 def _sheet(name: str) -> str:
