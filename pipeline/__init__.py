@@ -7,6 +7,7 @@ level and imported on first use, so that ``import roughcontact`` stays cheap::
     scene = rc.load_scene("default")          # a file, a built-in name or a dict
     results = rc.run(scene, outdir="outputs/default", progress=False)
     results["base"]["contact"]                # an xarray Dataset per variant and stage
+    rc.compute(scene)["base"]["contact"]      # the same, computed in memory (no file)
 
 The package has three layers (docs/architecture.md):
 
@@ -22,7 +23,7 @@ The package has three layers (docs/architecture.md):
 from .version import __version__  # the modules import it from there too (no cycle through this file)
 
 #: the Python API, re-exported from roughcontact.api on first use
-API = ("load_scene", "plan", "run", "open_result", "builtin_scenes", "Results")
+API = ("load_scene", "plan", "run", "compute", "open_result", "builtin_scenes", "Results")
 
 __all__ = ["__version__", *API]
 

@@ -9,6 +9,7 @@ Everything here is also available at the top level of the package::
         print(p.label, p.status, p.reasons)
     results = rc.run(scene, "outputs/default", progress=False)
     area = results["base"]["contact"]["contact_area_ratio"]     # an xarray DataArray, SI units
+    mem = rc.compute(scene, progress=False)            # the same, in memory: no file written or read
     rc.open_result("outputs/default/contact.nc")       # a result file, with its provenance
     rc.builtin_scenes()                                # {"default": Path(...), ...}
 
@@ -34,8 +35,8 @@ from .progress import Reporter
 from .results import StageResults
 from .scene import Scene
 
-__all__ = ["Results", "Scene", "StagePlan", "StageResults", "builtin_scenes", "load_scene", "open_result", "plan",
-           "run"]
+__all__ = ["Results", "Scene", "StagePlan", "StageResults", "builtin_scenes", "compute", "load_scene", "open_result",
+           "plan", "run"]
 
 
 class Results(dict):
@@ -132,6 +133,36 @@ def run(scene: str | Path | Mapping | Scene | None = None, outdir: str | Path | 
     out = _outdir(sc, outdir)
     report = progress if isinstance(progress, Reporter) else Reporter(sys.stderr if progress else None)
     return Results(engine.run(sc, out, force=force, report=report, scheduler=scheduler), out)
+
+
+def compute(scene: str | Path | Mapping | Scene | None = None, outputs: str | Iterable[str] | None = None, *,
+            preset: str | None = None, scheduler: str | None = None,
+            progress: bool | Reporter = True) -> dict[str, dict[str, xr.Dataset]]:
+    """Compute in memory what :func:`run` would compute, writing no file and reusing none.
+
+    The same checks before anything computes (input files, cross-key checks, sizes: the results
+    must fit in memory instead of on disk) and the same numbers as :func:`run`: both share the
+    engine's plan, preflight, stage computations and stamping. Nothing is left behind.
+
+    Parameters
+    ----------
+    scene, preset
+        As for :func:`load_scene`.
+    outputs
+        Variable or stage names to compute (with the stages they need); default: the scene's
+        ``[outputs] variables``.
+    scheduler, progress
+        As for :func:`run`.
+
+    Returns
+    -------
+    dict
+        ``results[variant][stage]``: xarray Datasets (loaded) with units, long names and
+        provenance; ``variant`` is ``"base"`` or a name of the scene's ``[variants]``.
+    """
+    sc = load_scene(scene, preset=preset)
+    report = progress if isinstance(progress, Reporter) else Reporter(sys.stderr if progress else None)
+    return engine.compute(sc, outputs, report=report, scheduler=scheduler)
 
 
 def open_result(path: str | Path) -> xr.Dataset:

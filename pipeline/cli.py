@@ -1,4 +1,4 @@
-"""Command line: ``roughcontact run|plan|show|plot|scenes``.
+"""Command line: ``roughcontact run|plan|show|plot|export|scenes``.
 
 Exit codes: 0 ok, 1 failure or (for ``plan``) something would run, 2 user error, 130 interrupted (Ctrl-C).
 """
@@ -48,6 +48,8 @@ def _parser() -> argparse.ArgumentParser:
     plot = scene_command("plot", "draw the figures of the scene's stages as PNG (computing what is missing)")
     plot.add_argument("--quiet", action="store_true", help="no progress bars: one line per stage and per figure")
     plot.add_argument("--scheduler", help="as for run")
+    _export_parser(scene_command("export", "write the scene's results as tidy tables (CSV or Excel) for "
+                                           "spreadsheets and FE codes (computing what is missing)"))
     scene_command("accuracy", "measure each stage's error and cost on a ladder of resolutions; NetCDF table + PNG")
     show = sub.add_parser("show", help="what is in a result file and where it came from")
     show.add_argument("file", type=Path)
@@ -142,6 +144,8 @@ def _scene_command(args, sc) -> int:
         return 0
     if args.command == "plot":
         return _plot(sc, outdir, reporter, args.scheduler)
+    if args.command == "export":
+        return _export(sc, outdir, reporter, args)
     if args.command == "accuracy":
         from .accuracy import measure
 
@@ -190,6 +194,22 @@ def _plot(sc, outdir: Path, reporter, scheduler=None) -> int:
         print(f"{f.title}: {target}")
     if empty:
         print(f"not drawn, nothing to show for this scene: {', '.join(empty)}")
+    return 0
+
+
+def _export_parser(p) -> None:
+    p.add_argument("--format", default="csv", help="csv (default) or xlsx (needs pandas and openpyxl)")
+    p.add_argument("--variables", nargs="+", metavar="NAME", help="only these variables (default: all)")
+    p.add_argument("--quiet", action="store_true")
+    p.add_argument("--scheduler", help="as for run")
+
+
+def _export(sc, outdir: Path, reporter, args) -> int:
+    """``export``: the tables in <outdir>/tables, one line per file written."""
+    from .export import export
+
+    for path in export(sc, outdir, args.format, args.variables, report=reporter, scheduler=args.scheduler):
+        print(path)
     return 0
 
 

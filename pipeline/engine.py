@@ -75,6 +75,10 @@ def result_path(outdir: Path, variant: str, stage: str) -> Path:
     return outdir / (f"{stage}.nc" if variant == "base" else f"variants/{variant}/{stage}.nc")
 
 
+#: the folder named in the plans of a computation in memory (nothing is written there)
+IN_MEMORY = Path("(in memory)")
+
+
 def default_outdir(scene: Scene) -> Path:
     return Path("outputs") / scene.name
 
@@ -85,8 +89,13 @@ def plan(scene: Scene, outdir: Path, targets: Iterable[str] | None = None, force
 
     A stored result with the right key is fresh if its data still match their checksum
     (:mod:`roughcontact.integrity`), checked for files up to ``integrity.VERIFY_LIMIT_BYTES``
-    (``verify`` None), for every file (True) or for none (False)."""
-    scene, outdir, targets, force = preflight.arguments(scene, outdir, targets, force)
+    (``verify`` None), for every file (True) or for none (False).
+
+    ``outdir`` None plans a computation in memory (:func:`compute`): every stage is to compute,
+    nothing stored is looked at or reused, and each ``path`` only names the stage (under
+    :data:`IN_MEMORY`)."""
+    memory = outdir is None
+    scene, outdir, targets, force = preflight.arguments(scene, IN_MEMORY if memory else outdir, targets, force)
     targets = tuple(targets) if targets is not None else scene.outputs
     for name in sorted(force - set(stages()) - {"all"}):
         raise UserError(f"no stage {name!r}{did_you_mean(name, sorted(stages()))}", key="--force")
@@ -95,9 +104,9 @@ def plan(scene: Scene, outdir: Path, targets: Iterable[str] | None = None, force
     for variant, sc in (("base", scene), *scene.variants.items()):
         keys: dict[str, str] = {}
         for st in needed_stages(sc, targets):
-            p = _plan_stage(sc, variant, st, outdir, keys, targets, force, verify)
+            p = _plan_stage(sc, variant, st, outdir, keys, targets, force, verify, stored=not memory)
             keys[st.name] = p.key
-            if p.status != "fresh" and not force & {st.name, "all"}:
+            if not memory and p.status != "fresh" and not force & {st.name, "all"}:
                 _find_identical(p, earlier, outdir)
             earlier.setdefault(p.key, p.path)
             plans.append(p)
@@ -117,7 +126,7 @@ def _find_identical(p: StagePlan, earlier: dict[str, Path], outdir: Path) -> Non
         p.reasons.append("an identical result of an earlier run is kept")
 
 
-def _plan_stage(scene, variant, st, outdir, keys, targets, force, verify=None) -> StagePlan:
+def _plan_stage(scene, variant, st, outdir, keys, targets, force, verify=None, stored=True) -> StagePlan:
     params = {name: st.section_view(name, scene.get(name)) for name in st.keys}
     absent = [name for name, value in params.items() if value is MISSING]
     if absent:
@@ -146,6 +155,9 @@ def _plan_stage(scene, variant, st, outdir, keys, targets, force, verify=None) -
     key = store.content_key(record)
     record["paths"] = {i["param"]: i["path"] for i in inputs}  # for messages only: not part of the key
     path = result_path(outdir, variant, st.name)
+    if not stored:  # computed in memory: nothing stored is looked at
+        return StagePlan(st, variant, path, key, record, "missing", ["computed in memory"], wanted, params,
+                         file_paths, inputs, scene.label)
     if path.exists() and not path.is_file():
         raise UserError(f"is not a file, but the result of stage {st.name} goes there: move it away", file=str(path))
     stored = store.read_attrs(path)
@@ -262,7 +274,7 @@ def run(scene: Scene, outdir: Path, targets: Iterable[str] | None = None, force:
     run on the same folder waits for it (at most ``lock_timeout`` seconds, None: until it ends).
     ``verify``: check the checksums of reused results of every size (see :func:`plan`).
     """
-    from .compute import scheduler as open_scheduler
+    from .scheduling import scheduler as open_scheduler
 
     scene, outdir, targets, force = preflight.arguments(scene, outdir, targets, force)
     report = report or Reporter()
@@ -285,23 +297,52 @@ def _plan_facts(plans: list[StagePlan]) -> list[tuple]:
     return [(p.variant, p.stage.name, p.key, p.status, p.source) for p in plans]
 
 
-def _run(scene, outdir, targets, force, report, compute_with, verify=None, checked=None):
-    from .compute import chunk_sweeps, quiet_libraries
-
+def _prepared(scene, outdir, targets, force, report, verify=None, checked=None):
+    """Plan the stages and run the preflight (every input file read, every check, every size)
+    before anything computes or is written; the notes go to the reporter. ``outdir`` None: in
+    memory (:func:`compute`). ``checked``: (plans, preflight verdict) of a check already made
+    before the output folder was locked, reused when the plan has not changed since."""
     plans = plan(scene, outdir, targets, force, verify)
     scenes = {"base": scene, **scene.variants}
-    store.clean_temporaries(outdir)
-    for folder in {p.path.parent for p in plans}:
-        store.clean_temporaries(folder)
-    results = {v: StageResults(_open) for v in scenes}  # each result opened when first read
-    # read every input file, run every validation and check every size before anything computes or is
-    # written: done before the lock already, again only if the plan changed since (another run, a damaged file)
     if checked is not None and _plan_facts(checked[0]) == _plan_facts(plans):
         files, shapes = checked[1]
     else:
         files, shapes = preflight.check(plans, scenes, outdir)
     for note in notes(plans, shapes):  # on a terminal; `plan` prints them always
         report.live(f"note: {note}")
+    return plans, scenes, files, shapes
+
+
+def _computed(p: StagePlan, scene: Scene, upstream, files: dict, shape: Shape, report: Reporter) -> xr.Dataset:
+    """One stage's result for plan ``p``: its compute on its keys, files and upstream results,
+    checked against its describe (:func:`conforms`), stamped with units and provenance (:func:`_finish`)."""
+    from .scheduling import chunk_sweeps
+
+    chunks = sizing.stage_chunks(scene, p.stage, p.wanted, shape)
+    inp = StageInput(
+        params=p.params,
+        upstream=chunk_sweeps(upstream, chunks),  # a sweep made upstream (eta, draw) splits this stage's work too
+        files=files,
+        wanted=p.wanted,
+        chunks=chunks,
+        stage=p.stage.name,
+        shape=shape,
+        reporter=report,
+    )
+    with xr.set_options(keep_attrs=False):  # a variable's units come from its declaration, never by inheritance
+        computed = p.stage.compute(inp)
+    conforms(computed, shape, p.label)
+    return _finish(computed, p)
+
+
+def _run(scene, outdir, targets, force, report, compute_with, verify=None, checked=None):
+    from .scheduling import quiet_libraries
+
+    store.clean_temporaries(outdir)
+    plans, scenes, files, shapes = _prepared(scene, outdir, targets, force, report, verify, checked)
+    for folder in {p.path.parent for p in plans}:
+        store.clean_temporaries(folder)
+    results = {v: StageResults(_open) for v in scenes}  # each result opened when first read
     n = len(plans)
     for i, p in enumerate(plans, start=1):
         tag = f"[{i}/{n}] {p.label}"
@@ -319,22 +360,8 @@ def _run(scene, outdir, targets, force, report, compute_with, verify=None, check
         t0 = time.perf_counter()
         upstream = {up: results[p.variant][up] for up in p.record["upstream"]}
         shape = shapes[(p.variant, p.stage.name)]
-        chunks = sizing.stage_chunks(scenes[p.variant], p.stage, p.wanted, shape)
-        inp = StageInput(
-            params=p.params,
-            upstream=chunk_sweeps(upstream, chunks),  # a sweep made upstream (eta, draw) splits this stage's work too
-            files=files[i - 1],
-            wanted=p.wanted,
-            chunks=chunks,
-            stage=p.stage.name,
-            shape=shape,
-            reporter=report,
-        )
         with quiet_libraries():  # dask's notes on chunks and graphs: the engine's business, not the user's
-            with xr.set_options(keep_attrs=False):  # units come from declarations, never by inheritance
-                computed = p.stage.compute(inp)
-            conforms(computed, shape, p.label)
-            ds = _finish(computed, p)
+            ds = _computed(p, scenes[p.variant], upstream, files[i - 1], shape, report)
             reuse.retire(p.path, outdir)  # the result it replaces stays reusable under its key
             store.write(ds, p.path, compute_with=compute_with, progress=report,
                         compress=scenes[p.variant].get("run.compress"), keep_blocks=shape.keep_blocks)
@@ -343,6 +370,46 @@ def _run(scene, outdir, targets, force, report, compute_with, verify=None, check
         report(f"{tag}: computed in {time.perf_counter() - t0:.2f} s ({why}) -> {p.path}")
     reuse.prune(outdir, [p.path for p in plans])
     return results
+
+
+def compute(scene: Scene, targets: Iterable[str] | None = None, report: Reporter | None = None,
+            scheduler: str | None = None) -> dict[str, dict[str, xr.Dataset]]:
+    """Every needed stage computed in memory: ``results[variant][stage]``, each Dataset loaded.
+
+    The same plan, preflight (:func:`roughcontact.preflight.check`: input files, checks, sizes,
+    with the results held in memory instead of on disk), stage computations and stamping as
+    :func:`run`, so the same numbers; but nothing stored is reused and no file is written or
+    removed. Upstream results are handed downstream as computed (loaded, as :func:`run` hands
+    every result up to 256 MB)."""
+    from .scheduling import scheduler as open_scheduler
+
+    scene = preflight.arguments(scene, IN_MEMORY, targets, ())[0]
+    report = report or Reporter()
+    plans, scenes, files, shapes = _prepared(scene, None, targets, (), report)
+    results: dict[str, dict[str, xr.Dataset]] = {v: {} for v in scenes}
+    from .scheduling import quiet_libraries
+
+    with open_scheduler(scheduler or scene.get("run.scheduler")) as compute_with, quiet_libraries():
+        for i, p in enumerate(plans, start=1):
+            report.live(f"[{i}/{len(plans)}] {p.label}: computing in memory")
+            t0 = time.perf_counter()
+            upstream = {up: results[p.variant][up] for up in p.record["upstream"]}
+            ds = _computed(p, scenes[p.variant], upstream, files[i - 1], shapes[(p.variant, p.stage.name)], report)
+            results[p.variant][p.stage.name] = _loaded(ds, compute_with)
+            report(f"[{i}/{len(plans)}] {p.label}: computed in memory in {time.perf_counter() - t0:.2f} s")
+    return results
+
+
+def _loaded(ds: xr.Dataset, compute_with) -> xr.Dataset:
+    """``ds`` with its dask-backed variables computed by ``compute_with`` (what
+    :func:`roughcontact.scheduling.scheduler` yields: a scheduler name, a process pool or a client)."""
+    from concurrent.futures import Executor
+
+    if not any(v.chunks is not None for v in ds.variables.values()):
+        return ds
+    if isinstance(compute_with, Executor):
+        return ds.load(scheduler="processes", pool=compute_with)
+    return ds.load(scheduler=compute_with)
 
 
 def checked_notes(scene: Scene, plans: list[StagePlan], outdir: Path) -> list[str]:

@@ -129,7 +129,7 @@ def stage_chunks(scene, st, wanted, shape) -> dict[str, int]:
     """Chunk sizes for the stage's sweep dimensions: the scene's explicit ones, the others chosen
     so that a chunk's working memory (:func:`point_bytes` of the stage's shape) stays near
     chunk_mb; the dimensions the computation couples are never chunked."""
-    from .compute import auto_chunks
+    from .scheduling import auto_chunks
 
     sizes = scene.sweep_sizes()
     per_point = point_bytes(shape, len(outputs_asked(st, wanted)), sizes)
@@ -177,8 +177,9 @@ def estimate(plan, scene, spanned: dict[str, int], own, in_flight: int, lazy: fr
     return Estimate(plan.label, plan.path, result, working, dims, parallel, tuple(work_keys), text)
 
 
-def check(estimates: list[Estimate], outdir: Path) -> None:
-    """Refuse a plan whose results exceed the output disk or one of whose blocks exceeds memory."""
+def check(estimates: list[Estimate], outdir: Path | None) -> None:
+    """Refuse a plan whose results exceed the output disk (``outdir`` None: the memory, where they
+    are then held) or one of whose blocks exceeds memory."""
     memory = available_memory()
     for e in estimates:
         if e.working > memory:
@@ -191,6 +192,16 @@ def check(estimates: list[Estimate], outdir: Path) -> None:
                 f"{', '.join(keys) or 'the sizes'} (chunking bounds the memory of sweeps, not of a single point)",
                 key=keys[0].split(" ")[0] if keys else None)
     total = sum(e.result for e in estimates)
+    if outdir is None and total > memory:
+        big = max(estimates, key=lambda e: e.result)
+        keys = big.keys()
+        raise UserError(
+            f"the results would take about {human(total)} of memory ({big.label}: {human(big.result)}, "
+            f"{big.describe()}) but this machine has {human(memory)} available: reduce "
+            f"{', '.join(keys) or 'the sweeps'} or write them to files (run)",
+            key=keys[0].split(" ")[0] if keys else None)
+    if outdir is None:
+        return
     free = free_disk(outdir)
     if total > free:
         big = max(estimates, key=lambda e: e.result)

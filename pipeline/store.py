@@ -28,7 +28,8 @@ from .errors import OutputError
 from .version import __version__
 
 TMP_PREFIX = ".tmp-"
-#: folder (beside a result) of the finished blocks of results being written (:class:`roughcontact.compute.KeptBlocks`)
+#: folder (beside a result) of the finished blocks of results being written
+#: (:class:`roughcontact.scheduling.KeptBlocks`)
 BLOCKS = ".blocks"
 
 
@@ -168,7 +169,7 @@ def write(ds: xr.Dataset, path: Path, compute_with="threads", progress=None, com
     """Write ``ds`` to ``path`` atomically: a temporary file in the same folder, then a rename.
 
     Dask-backed variables are computed block by block by ``compute_with`` (a dask scheduler
-    name or a distributed Client) and written from this process (:func:`pipeline.compute.write_blocks`),
+    name or a distributed Client) and written from this process (:func:`roughcontact.scheduling.write_blocks`),
     so a result never has to fit in memory (``progress``: a :class:`roughcontact.progress.Reporter`
     showing the blocks written; ``compress``: large variables zlib-compressed, :mod:`roughcontact.cf`).
     A crash or kill while writing leaves at most a
@@ -183,7 +184,7 @@ def write(ds: xr.Dataset, path: Path, compute_with="threads", progress=None, com
     the blocks not kept. Kept blocks of the same result under another key (an older scene) are
     removed when it is written.
     """
-    from .compute import KeptBlocks, dask_variables, write_blocks
+    from .scheduling import KeptBlocks, dask_variables, write_blocks
 
     path = Path(path)
     key = ds.attrs.get("stage_key")

@@ -18,7 +18,6 @@ from roughcontact.errors import UserError
 from roughcontact.physics import friction as physics_friction, viscoelastic as ve
 from roughcontact.physics.contact import persson_G
 from roughcontact.physics.quadrature import log_grid
-from roughcontact.stages import friction as fr, modulus as md
 
 QUIET = engine.Reporter(None)
 
@@ -152,21 +151,14 @@ def test_agrees_with_brute_force_scipy(v):
 
 def _stage_at(sc, v):
     """mu, A/A0 of the built-in scene (eta = 0) at one velocity, through the stage's compute."""
-    from roughcontact.stage import StageInput
-    from roughcontact.stages import psd as ps
+    import copy
 
-    values = sc.values
-    def get(key):
-        section, _, name = key.partition(".")
-        return values[section][name] if name else values[section]
+    import roughcontact as rc
 
-    psd = ps.compute_psd(StageInput(params={k: get(k) for k in ps.STAGE.keys}))
-    ppd = values["numerics"]["modulus_points_per_decade"]
-    mod = md.compute_modulus(StageInput(params={"modulus": values["modulus"],
-                                               "numerics.modulus_points_per_decade": ppd}))
-    params = {k: get(k) for k in fr.STAGE.keys}
-    params["friction.v"] = v
-    out = fr.compute_friction(StageInput(params=params, upstream={"psd": psd, "modulus": mod}))
+    raw = copy.deepcopy(sc.raw)
+    raw.pop("variants", None)
+    raw["friction"]["v"] = f"{v!r} m/s"
+    out = rc.compute(scenes.from_dict(raw, sc.path), outputs="friction", progress=False)["base"]["friction"]
     sel = out.sel(eta=0.0)
     return float(sel["friction_coefficient"]), float(sel["sliding_contact_area_ratio"])
 

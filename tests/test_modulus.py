@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
+import roughcontact as rc
 from roughcontact import cli, engine, scene as scenes, store
 from roughcontact.errors import UserError
 from roughcontact.physics import viscoelastic as ve
-from roughcontact.stage import StageInput
 from roughcontact.stages import modulus as md
 
 QUIET = engine.Reporter(None)
@@ -180,9 +180,8 @@ def test_complex_modulus_survives_netcdf_round_trip(tmp_path):
     import netCDF4
 
     spec = dict(BOX, T_ref="-40 degC", T=["-40 degC", "25 degC"], shift="wlf", C2="51.6 K")
-    sc = scenes.from_dict(_raw(spec))
-    ds = md.compute_modulus(StageInput(params={"modulus": sc.values["modulus"],
-                                               "numerics.modulus_points_per_decade": 20}))
+    ds = rc.compute(_raw(spec, numerics={"modulus_points_per_decade": 20}), outputs="modulus",
+                    progress=False)["base"]["modulus"]
     before = md.complex_modulus(ds)
     path = tmp_path / "modulus.nc"
     store.write(ds, path)

@@ -163,10 +163,10 @@ def test_a_full_disk_names_the_file_and_keeps_nothing_of_it(tmp_path, capsys, mo
     out = tmp_path / "out"
     assert main(["run", str(path), "--outdir", str(out), "--quiet"]) == 0
     before = {f: (out / f).read_bytes() for f in ("psd.nc", "contact.nc")}
-    import roughcontact.compute
+    import roughcontact.scheduling
 
     if where == "block writes":
-        monkeypatch.setattr(roughcontact.compute, "write_blocks", _enospc)
+        monkeypatch.setattr(roughcontact.scheduling, "write_blocks", _enospc)
     else:
         monkeypatch.setattr(xr.Dataset, "to_netcdf", _hdf_error)
     capsys.readouterr()

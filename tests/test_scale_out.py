@@ -8,7 +8,7 @@ import xarray as xr
 from conftest import SURFACE, make_scene
 
 from roughcontact import engine, scene as scenes
-from roughcontact.compute import auto_chunks
+from roughcontact.scheduling import auto_chunks
 from roughcontact.stage import StageInput, stages
 
 PROVENANCE = ("history", "date_created", "git_commit", "scene", "data_checksum")

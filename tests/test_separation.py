@@ -16,6 +16,7 @@ from reference_solutions import brute_force_u, self_affine_q3C_integral
 from scipy.integrate import quad
 from scipy.special import erf
 
+import roughcontact as rc
 from roughcontact import cli
 from roughcontact.physics.quadrature import gauss_legendre_panels, integral_to, inverse_cumulative_integral, log_grid
 from roughcontact.physics.separation import (
@@ -27,8 +28,6 @@ from roughcontact.physics.separation import (
     yang_persson_J,
 )
 from roughcontact.physics.spectra import psd_combined, self_affine_hrms_factor, self_affine_psd
-from roughcontact.scene import from_dict
-from roughcontact.stage import StageInput, stages
 
 H, QL, Q1 = 0.8, 2e8, 4e10
 E_STAR = 77.2e9 / (1 - 0.42**2)
@@ -56,14 +55,7 @@ def seed_scene(p, zeta=(4.0, 200.0), ppd=20, separation=None, numerics=None, eta
 
 def run_in_memory(raw):
     """{variant: separation Dataset} computed without touching the disk."""
-    sc = from_dict(raw)
-    out = {}
-    for variant, scv in (("base", sc), *sc.variants.items()):
-        psd_stage, sep_stage = stages()["psd"], stages()["separation"]
-        psd = psd_stage.compute(StageInput(params={k: scv.get(k) for k in psd_stage.keys}, chunks=scv.chunks))
-        out[variant] = sep_stage.compute(
-            StageInput(params={k: scv.get(k) for k in sep_stage.keys}, upstream={"psd": psd}, chunks=scv.chunks))
-    return out
+    return {variant: by_stage["separation"] for variant, by_stage in rc.compute(raw, progress=False).items()}
 
 
 def kernel_u(q, C, q_upper, p, alpha=ALPHA, refinement="none", panels=4, order=4, depth=10.0):
