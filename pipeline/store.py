@@ -68,6 +68,20 @@ def _defer_array_libraries() -> None:
         return
     for name, module in (("dask", "dask.array"), ("pint", "pint")):
         cache.setdefault(name, _ImportedOnUse(name, module))
+    try:  # the duck-array test behind every new index imports dask (0.25 s) to ask dask's own test
+        from xarray.namedarray import utils
+
+        dask_test = utils.is_dask_collection
+    except (ImportError, AttributeError):
+        return
+    if getattr(dask_test, "__name__", "") != "_is_dask_collection":
+
+        def _is_dask_collection(x) -> bool:
+            """dask's test, which says no to anything without ``__dask_graph__`` (a numpy array)
+            before it looks further: said here, without importing dask for it."""
+            return hasattr(x, "__dask_graph__") and dask_test(x)
+
+        utils.is_dask_collection = _is_dask_collection
 
 
 _defer_array_libraries()
