@@ -3,13 +3,13 @@ as ratios to ``python -c "import numpy, xarray"`` (the import floor) measured in
 
     python tests/benchmarks/bench_startup.py [--repeat 9] [--scene default] [--baseline REV] [--smoke]
 
-Each command runs as a fresh process, the commands interleaved, ``--repeat`` times; the median
-time of each is kept and divided by the floor's median (the ratio is the number to read: the
-shared machine's load moves both). Targets: ``run`` and ``plan`` with every result fresh at most
-1.5x the floor (issue 13); the cold scene (a fresh output folder, the parsed scene cached) at
-most 2x (issue 27); ``--help`` well below the floor (it loads no science stack). "cold, new
-scene" turns the parsed-scene cache off (ROUGHCONTACT_CACHE=off), so that the scene is parsed
-and the unit registry built.
+Each command runs as a fresh process, the commands interleaved, ``--repeat`` times; each time is
+divided by the floor's time of the same round and the median of these ratios is the number to
+read (the shared machine's load moves a round's commands alike; the median times are shown too).
+Targets: ``run`` and ``plan`` with every result fresh at most 1.5x the floor (issue 13); the cold
+scene (a fresh output folder, the parsed scene cached) at most 2x (issue 27); ``--help`` well
+below the floor (it loads no science stack). "cold, new scene" turns the parsed-scene cache off
+(ROUGHCONTACT_CACHE=off), so that the scene is parsed and the unit registry built.
 
 ``--baseline REV`` adds, interleaved with the others, the cold scene and ``--help`` of the git
 revision REV of this repository (its files exported to a temporary folder and imported from
@@ -106,8 +106,9 @@ def main() -> None:
                 for out in tmp.glob(pattern):
                     shutil.rmtree(out)
     median = {name: statistics.median(t) for name, t in times.items()}
-    base = median[FLOOR]
-    print(f"scene {args.scene}, median of {args.repeat} interleaved runs each; ratio to the import floor")
+    ratio = {name: statistics.median(a / b for a, b in zip(t, times[FLOOR], strict=True)) for name, t in times.items()}
+    print(f"scene {args.scene}, {args.repeat} interleaved rounds: median time, median of the rounds' ratios to the "
+          "import floor")
     if os.environ.get("PYTHONDONTWRITEBYTECODE"):
         print("note: PYTHONDONTWRITEBYTECODE is set: roughcontact's modules are compiled at every start "
               "(an install compiles them once)")
@@ -115,7 +116,7 @@ def main() -> None:
     for name, seconds in median.items():
         target = f"  (target <= {targets[name]:g}x)" if name in targets else ""
         per_round = ", ".join(f"{t / f:.2f}" for t, f in zip(times[name], times[FLOOR], strict=True))
-        print(f"{name:48s} {seconds:6.3f} s  {seconds / base:5.2f}x{target}  (per round: {per_round})")
+        print(f"{name:48s} {seconds:6.3f} s  {ratio[name]:5.2f}x{target}  (per round: {per_round})")
 
 
 if __name__ == "__main__":
