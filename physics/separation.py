@@ -30,7 +30,7 @@ import numpy as np
 
 from .inputs import require_pressure
 from .quadrature import cumulative_integral, gauss_legendre_panels, integral_to, inverse_cumulative_integral
-from .special import erf, erfcx, exp1
+from .special import erf, erfcx, exp1, exp1_fast
 
 #: eps = exp(\\int_0^inf 2x ln x exp(-x^2) dx) = exp(-gamma_Euler / 2) = 0.749306..., seed eq 28.
 EPSILON = float(np.exp(-0.5 * np.euler_gamma))
@@ -83,34 +83,6 @@ def inverse_w(q, C):
     """
     q = np.asarray(q, dtype=float)
     return np.sqrt(np.pi * cumulative_integral(q, q**3 * np.asarray(C, dtype=float)))
-
-
-#: Abramowitz & Stegun 5.1.56: x e^x E1(x) = P(x)/Q(x) within 2e-8 for x >= 1 (P, Q monic quartics)
-_E1_P = (8.5733287401, 18.0590169730, 8.6347608925, 0.2677737343)
-_E1_Q = (9.5733223454, 25.6329561486, 21.0996530827, 3.9584969228)
-
-
-def exp1_kernel(x):
-    """E1(x) for x >= 0, 0 from x = 750 on (below 1e-328): scipy's exp1 below 1 and the rational
-    approximation of Abramowitz & Stegun 5.1.56 (relative error < 2e-8) above, where scipy's
-    continued fraction is 3-10 times slower; the separation kernel evaluates E1 at every
-    (pressure, node) pair (and at every spectrum draw of the uncertainty bands).
-
-    References
-    ----------
-    Abramowitz & Stegun, Handbook of Mathematical Functions, eq 5.1.56.
-    """
-    x = np.asarray(x, dtype=float)
-    out = np.zeros_like(x)
-    low = x < 1.0
-    out[low] = exp1(x[low])
-    high = ~low & (x < 750.0)
-    y = x[high]
-    p = (((y + _E1_P[0]) * y + _E1_P[1]) * y + _E1_P[2]) * y + _E1_P[3]
-    q = (((y + _E1_Q[0]) * y + _E1_Q[1]) * y + _E1_Q[2]) * y + _E1_Q[3]
-    with np.errstate(under="ignore"):
-        out[high] = np.exp(-y) / y * p / q
-    return out
 
 
 def e1_integral(s, a):
@@ -425,7 +397,7 @@ def mean_separation(p, s, weight, count, s_tail, q_tail, *, E_star, alpha, refin
     a = require_pressure(p, positive=True)[..., None] / E_star
     with np.errstate(divide="ignore", over="ignore", under="ignore"):
         z = a * np.where(s > 0, 1.0 / np.where(s > 0, s, 1.0), np.inf)
-        kernel = exp1_kernel(z * z)
+        kernel = exp1_fast(z * z)  # numpy E1: 3-4x scipy's exp1 here (the bands' draws multiply its calls)
     kernel *= weight
     body = _cumulative_at(kernel, count)
     tail = e1_integral(s_tail, a)

@@ -12,12 +12,64 @@ import traceback
 import warnings
 from pathlib import Path
 
-from . import engine, scene as scenes, store
 from .errors import ComputationError, SceneWarning, UserError
-from .scene import units_of
-from .stage import stages
-from .units import display
 from .version import __version__
+
+
+class _OnUse:
+    """A module imported when one of its names is first used: ``roughcontact --help`` (and a
+    mistyped command) answer without loading numpy, xarray and the stages."""
+
+    def __init__(self, load):
+        self._load = load
+
+    def __getattr__(self, name):
+        return getattr(self._load(), name)
+
+
+def _engine():
+    from . import engine
+
+    return engine
+
+
+def _scene():
+    from . import scene
+
+    return scene
+
+
+def _store():
+    from . import store
+
+    return store
+
+
+def _stage():
+    from . import stage
+
+    return stage
+
+
+def _units():
+    from . import units
+
+    return units
+
+
+engine, scenes, store, _stages, _unit_text = (_OnUse(f) for f in (_engine, _scene, _store, _stage, _units))
+
+
+def units_of(key):
+    return scenes.units_of(key)
+
+
+def stages():
+    return _stages.stages()
+
+
+def display(value, units):
+    return _unit_text.display(value, units)
 
 
 def _parser() -> argparse.ArgumentParser:

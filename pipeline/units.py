@@ -2,12 +2,15 @@
 
 Everything inside roughcontact is SI; this module is the only place that talks to pint, which
 is imported, and its registry built, only when a quantity is parsed (a rerun whose scene is
-unchanged takes its parsed values from :mod:`roughcontact.scenecache` and never does).
+unchanged takes its parsed values from :mod:`roughcontact.scenecache` and never does). Showing an
+SI quantity ("77.2 GPa", "2e8 1/m": :func:`readable`) needs no pint: the SI unit strings the stages
+declare are read by a small parser here (:func:`si_dimension`), pint only for anything else.
 """
 
 from __future__ import annotations
 
 import functools
+import math
 import re
 from typing import TYPE_CHECKING
 
@@ -40,8 +43,71 @@ def _unit(text: str, key: str | None) -> "pint.Unit":
         raise UserError(f"cannot read unit {text!r} ({exc.__class__.__name__})", key=key) from None
 
 
+#: the SI symbols (and the named SI units) :func:`si_dimension` knows, as exponents of (m, kg, s, K, A, mol, cd)
+_SI = {"m": (1, 0, 0, 0, 0, 0, 0), "kg": (0, 1, 0, 0, 0, 0, 0), "s": (0, 0, 1, 0, 0, 0, 0), "K": (0, 0, 0, 1, 0, 0, 0),
+       "A": (0, 0, 0, 0, 1, 0, 0), "mol": (0, 0, 0, 0, 0, 1, 0), "cd": (0, 0, 0, 0, 0, 0, 1),
+       "Pa": (-1, 1, -2, 0, 0, 0, 0), "N": (1, 1, -2, 0, 0, 0, 0), "J": (2, 1, -2, 0, 0, 0, 0),
+       "W": (2, 1, -3, 0, 0, 0, 0), "Hz": (0, 0, -1, 0, 0, 0, 0), "C": (0, 0, 1, 0, 1, 0, 0),
+       "V": (2, 1, -3, 0, -1, 0, 0), "ohm": (2, 1, -3, 0, -2, 0, 0), "S": (-2, -1, 3, 0, 2, 0, 0),
+       "rad": (0,) * 7, "sr": (0,) * 7}
+_TOKEN = re.compile(r"\s*(\*\*|[*/^()]|[A-Za-z]+|\d+(?:\.\d*)?|-\d+)")
+
+
+def si_dimension(units: str) -> tuple[float, ...] | None:
+    """The exponents of (m, kg, s, K, A, mol, cd) of an SI unit string ("Pa/m", "W/(m^2*K)",
+    "1/m", "m^4"), or None when it holds anything but the symbols of :data:`_SI` (pint reads those).
+    Products are written with ``*`` or a space, powers with ``^`` or ``**``; ``/`` divides by the
+    next factor (a bracket or one symbol with its power), as pint reads it."""
+    tokens, pos = [], 0
+    while pos < len(units.rstrip()):
+        m = _TOKEN.match(units, pos)
+        if not m:
+            return None
+        tokens.append(m.group(1))
+        pos = m.end()
+
+    def product(i):  # factors up to a closing bracket or the end
+        total = np.zeros(7)
+        while i < len(tokens) and tokens[i] != ")":
+            sign = 1.0
+            if tokens[i] in "*/":
+                sign = -1.0 if tokens[i] == "/" else 1.0
+                i += 1
+            dim, i = power(i)
+            if dim is None:
+                return None, i
+            total += sign * dim
+        return total, i
+
+    def power(i):  # one factor with an optional exponent
+        if i >= len(tokens):
+            return None, i
+        if tokens[i] == "(":
+            dim, i = product(i + 1)
+            if dim is None or i >= len(tokens):
+                return None, i
+            i += 1
+        elif tokens[i] in _SI:
+            dim, i = np.array(_SI[tokens[i]], dtype=float), i + 1
+        elif tokens[i][0].isdigit():
+            dim, i = np.zeros(7), i + 1
+        else:
+            return None, i
+        if i < len(tokens) and tokens[i] in ("^", "**"):
+            if i + 1 >= len(tokens) or not tokens[i + 1].lstrip("-")[:1].isdigit():
+                return None, i
+            dim, i = dim * float(tokens[i + 1]), i + 2
+        return dim, i
+
+    dim, end = product(0)
+    return tuple(dim.tolist()) if dim is not None and end == len(tokens) else None
+
+
 def is_dimensionless(units: str) -> bool:
-    return units in ("", "1") or _unit(units, None).dimensionless
+    if units in ("", "1"):
+        return True
+    dim = si_dimension(units)
+    return not any(dim) if dim is not None else _unit(units, None).dimensionless
 
 
 def to_si(value, units: str, *, key: str | None = None, default_unit: str | None = None,
@@ -153,9 +219,15 @@ def readable(value: float, units: str, digits: int = 4) -> str:
     if is_dimensionless(units) or not np.isfinite(value):
         return f"{number(value, digits)} {units}".rstrip() if units not in ("", "1") else number(value, digits)
     if units in _PREFIXED and value != 0:
-        q = registry().Quantity(value, units).to_compact()
-        return f"{number(q.magnitude, digits)} {q.units:~}".replace("µ", "u").replace(" ** ", "^").replace(" / ", "/")
+        power = math.floor(math.log10(abs(value)) / 3) * 3  # as pint's to_compact chooses the prefix
+        power = min(max(power, min(_PREFIXES)), max(_PREFIXES))
+        return f"{number(value / 10.0**power if power > 0 else value * 10.0**-power, digits)} {_PREFIXES[power]}{units}"
     return f"{number(value, digits)} {units}"
+
+
+#: the SI prefixes by power of ten (micro written u), as :func:`readable` prefixes the first unit
+_PREFIXES = dict(zip(range(-30, 31, 3), "q r y z a f p n u m _ k M G T P E Z Y R Q".split(), strict=True))
+_PREFIXES[0] = ""
 
 
 def display(value, units: str | None) -> str:

@@ -48,7 +48,7 @@ def test_changing_the_surface_makes_both_stages_stale_and_says_why(tmp_path):
 def test_killed_write_leaves_nothing_taken_as_valid(tmp_path, monkeypatch):
     out = tmp_path / "out"
     raw = make_scene()
-    real = xr.Dataset.to_netcdf
+    real = store._write_in_memory  # the write of a result's in-memory variables (xarray's netCDF4 store)
 
     def dying(self, path, *args, **kwargs):
         real(self, path, *args, **kwargs)
@@ -56,7 +56,7 @@ def test_killed_write_leaves_nothing_taken_as_valid(tmp_path, monkeypatch):
             fh.truncate(100)
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(xr.Dataset, "to_netcdf", dying)
+    monkeypatch.setattr(store, "_write_in_memory", dying)
     with pytest.raises(KeyboardInterrupt):
         engine.run(scenes.from_dict(raw), out, report=engine.Reporter(None))
     monkeypatch.undo()

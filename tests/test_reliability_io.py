@@ -164,11 +164,12 @@ def test_a_full_disk_names_the_file_and_keeps_nothing_of_it(tmp_path, capsys, mo
     assert main(["run", str(path), "--outdir", str(out), "--quiet"]) == 0
     before = {f: (out / f).read_bytes() for f in ("psd.nc", "contact.nc")}
     import roughcontact.scheduling
+    import roughcontact.store
 
     if where == "block writes":
         monkeypatch.setattr(roughcontact.scheduling, "write_blocks", _enospc)
     else:
-        monkeypatch.setattr(xr.Dataset, "to_netcdf", _hdf_error)
+        monkeypatch.setattr(roughcontact.store, "_write_in_memory", _hdf_error)  # the in-memory variables' write
     capsys.readouterr()
     code, err = _cli(capsys, "run", path, "--outdir", out, "--quiet", "--force", stage)
     assert code == 1 and "cannot write this result" in err and "nothing of it was kept" in err
