@@ -16,7 +16,6 @@ import json
 import os
 import socket
 import subprocess
-import sys
 import tempfile
 from pathlib import Path
 from typing import Any, Mapping
@@ -32,63 +31,6 @@ TMP_PREFIX = ".tmp-"
 #: folder (beside a result) of the finished blocks of results being written
 #: (:class:`roughcontact.scheduling.KeptBlocks`)
 BLOCKS = ".blocks"
-
-
-class _ImportedOnUse:
-    """xarray's record of an optional array library (dask.array, pint) that imports nothing while
-    the library is not imported yet. xarray asks for the library's array type on every new
-    DataArray (an ``isinstance`` check) and imports the library to answer, which costs a small
-    run 0.4 s for dask.array; while the library is not imported no object can be one of its
-    arrays, so the answer is "no type" until then. Anything else xarray asks (version, module)
-    imports the library as before."""
-
-    def __init__(self, name: str, module: str):
-        self.name, self.module_name = name, module
-
-    def _real(self):
-        from xarray.namedarray import pycompat
-
-        real = pycompat.DuckArrayModule(self.name)
-        pycompat._cached_duck_array_modules[self.name] = real
-        return real
-
-    @property
-    def type(self):
-        return self._real().type if self.module_name in sys.modules else ()
-
-    def __getattr__(self, attr):  # module, version, available: as xarray's own record
-        return getattr(self._real(), attr)
-
-
-def _defer_array_libraries() -> None:
-    """Install :class:`_ImportedOnUse` for dask and pint in xarray's cache (left alone if an
-    xarray without that cache is installed: runs are then only slower)."""
-    try:
-        from xarray.namedarray import pycompat
-
-        cache = pycompat._cached_duck_array_modules
-        pycompat.DuckArrayModule  # noqa: B018 (present, or nothing is deferred)
-    except (ImportError, AttributeError):
-        return
-    for name, module in (("dask", "dask.array"), ("pint", "pint")):
-        cache.setdefault(name, _ImportedOnUse(name, module))
-    try:  # the duck-array test behind every new index imports dask (0.25 s) to ask dask's own test
-        from xarray.namedarray import utils
-
-        dask_test = utils.is_dask_collection
-    except (ImportError, AttributeError):
-        return
-    if getattr(dask_test, "__name__", "") != "_is_dask_collection":
-
-        def _is_dask_collection(x) -> bool:
-            """dask's test, which says no to anything without ``__dask_graph__`` (a numpy array)
-            before it looks further: said here, without importing dask for it."""
-            return hasattr(x, "__dask_graph__") and dask_test(x)
-
-        utils.is_dask_collection = _is_dask_collection
-
-
-_defer_array_libraries()
 
 
 def canonical(value: Any):
