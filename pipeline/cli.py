@@ -252,7 +252,7 @@ def _plot(sc, outdir: Path, reporter, scheduler=None) -> int:
 def _export_parser(p) -> None:
     p.add_argument("--format", default="csv", help="csv (default) or xlsx (needs pandas and openpyxl)")
     p.add_argument("--variables", nargs="+", metavar="NAME", help="only these variables (default: all)")
-    p.add_argument("--quiet", action="store_true")
+    p.add_argument("--quiet", action="store_true", help="no progress bars: one line per stage and per table")
     p.add_argument("--scheduler", help="as for run")
 
 
