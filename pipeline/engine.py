@@ -308,9 +308,22 @@ def _prepared(scene, outdir, targets, force, report, verify=None, checked=None):
         files, shapes = checked[1]
     else:
         files, shapes = preflight.check(plans, scenes, outdir)
-    for note in notes(plans, shapes):  # on a terminal; `plan` prints them always
-        report.live(f"note: {note}")
+    differing = set(_differing(plans, shapes))
+    for note in notes(plans, shapes):  # on a terminal; `plan` prints them always, and so does `run` where they differ
+        (report if note in differing else report.live)(f"note: {note}")
     return plans, scenes, files, shapes
+
+
+def _differing(plans: list[StagePlan], shapes) -> list[str]:
+    """The notes of a stage that differ between the scene and its variants (e.g. another
+    reference wavenumber of zeta): what the user must know even off a terminal."""
+    by_stage: dict[str, dict[str, str]] = {}
+    for p in plans:
+        shape = shapes.get((p.variant, p.stage.name))
+        if shape is not None and shape.attrs.get("note"):
+            by_stage.setdefault(p.stage.name, {})[p.label] = shape.attrs["note"]
+    return [f"{label}: {note}" for per in by_stage.values() if len(set(per.values())) > 1
+            for label, note in per.items()]
 
 
 def _computed(p: StagePlan, scene: Scene, upstream, files: dict, shape: Shape, report: Reporter) -> xr.Dataset:

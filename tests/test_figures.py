@@ -18,6 +18,7 @@ the others, and large_sweep and interface_bem at their full sizes, are marked sl
 
 from __future__ import annotations
 
+import io
 import re
 
 import matplotlib
@@ -301,7 +302,10 @@ def test_variants_at_another_reference_wavenumber_are_named(tmp_path):
                      variants={"substrate_only": {"solid": {"kind": "smooth"}},
                                "stiffer": {"material": {"E": "100 GPa"}}})
     sc = scenes.from_dict(raw)
-    results = engine.run(sc, tmp_path / "out", report=engine.Reporter(None))
+    log = io.StringIO()  # off a terminal, as in a log file: run says so too
+    results = engine.run(sc, tmp_path / "out", report=engine.Reporter(log))
+    said = [line for line in log.getvalue().splitlines() if line.startswith("note: psd")]
+    assert any("qL = 1e8 1/m" in line for line in said) and any("qL = 2e8 1/m" in line for line in said), said
     assert float(results["base"]["contact"]["qL"]) == pytest.approx(1e8)
     assert float(results["substrate_only"]["contact"]["qL"]) == pytest.approx(2e8)
     for f in scene_figures(sc)[0]:
