@@ -28,7 +28,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .viscoelastic import prony_modulus, wlf_log10_shift
+from .viscoelastic import GAS_CONSTANT, prony_modulus, wlf_arrhenius_log10_shift, wlf_log10_shift
 
 
 class Shifts(NamedTuple):
@@ -52,6 +52,11 @@ class Shifts(NamedTuple):
         shifts.
     at_edge : bool array (n_T,)
         The overlap shift of the sweep wanted less overlap than allowed (not determined by overlap).
+    law : str
+        The law fitted to the shifts (:data:`SHIFT_LAWS`).
+    T_g, E_a : float
+        With ``law = "wlf_arrhenius"``: glass transition (K) and activation energy (J/mol) of the
+        Arrhenius branch below it (NaN with ``wlf``).
     """
 
     log10_aT: np.ndarray
@@ -64,6 +69,9 @@ class Shifts(NamedTuple):
     overlap: np.ndarray
     misfit: np.ndarray
     at_edge: np.ndarray
+    law: str = "wlf"
+    T_g: float = float("nan")
+    E_a: float = float("nan")
 
 
 def _spline_residuals(x, ys, knots_per_decade):
@@ -302,6 +310,117 @@ def fit_wlf(T, log10_aT, T_ref, anchor=None, sigma=None, C2=None):
     return C1, C2, L0 - model(fit.x)
 
 
+#: shift laws fitted to the shifts: WLF, or WLF above T_g and Arrhenius below
+SHIFT_LAWS = ("wlf", "wlf_arrhenius")
+
+
+class ShiftLaw(NamedTuple):
+    """A fitted WLF-Arrhenius law (see :func:`fit_wlf_arrhenius`): C1, C2 (K), T_g (K), E_a
+    (J/mol) and log10 a_j minus the law (decades)."""
+
+    C1: float
+    C2: float
+    T_g: float
+    E_a: float
+    residual: np.ndarray
+
+
+def fit_wlf_arrhenius(T, log10_aT, T_ref, anchor=None, sigma=None, T_g=None):
+    """WLF above T_g and Arrhenius below it (:func:`~roughcontact.physics.viscoelastic.wlf_arrhenius_log10_shift`),
+    continuous in log10 a_T at T_g, fitted to measured shifts (least squares in log10 a_T).
+
+    With ``T_g`` given, C1, C2 and E_a are fitted; else T_g too, as the breakpoint: every T_g on a
+    grid of 1/4 of the smallest temperature step between the second-coldest and the third-warmest
+    temperature (below T_ref) is tried, and the best is refined within one grid step. The start of
+    each fit is WLF fitted to the shifts at and above T_g (:func:`fit_wlf`) and E_a by linear least
+    squares on the shifts below. C2 is kept above T_ref - T_g, so that the WLF branch is finite.
+
+    Parameters
+    ----------
+    T : array (n,)
+        Temperatures (K), increasing.
+    log10_aT : array (n,)
+        Shifts (log10), relative to the sweep ``anchor`` (or absolute, about T_ref, if None).
+    T_ref : float
+        Reference temperature of the law (K), above T_g.
+    anchor : int or None
+        Index whose shift is the zero of ``log10_aT``.
+    sigma : array (n,) or None
+        Standard errors of the shifts (decades): weights 1/sigma.
+    T_g : float or None
+        Given glass-transition temperature (K), or None to fit it.
+
+    Returns
+    -------
+    ShiftLaw
+
+    References
+    ----------
+    docs/theory.md, section "Master curves from DMA data"; Ferry (1980), ch. 11.
+    """
+    from scipy.optimize import least_squares
+
+    T = np.asarray(T, dtype=float)
+    L = np.asarray(log10_aT, dtype=float)
+    T0 = T[anchor] if anchor is not None else T_ref
+    L0 = L - (L[anchor] if anchor is not None else 0.0)
+    weight = 1.0 / np.maximum(sigma, 1e-6 * np.max(sigma)) if sigma is not None else np.ones_like(T)
+    k = GAS_CONSTANT * np.log(10.0)
+
+    def law(C1, C2, Tg, Ea):
+        W = wlf_arrhenius_log10_shift(T, T_ref, C1, C2, Tg, Ea)
+        return W - (wlf_arrhenius_log10_shift(T0, T_ref, C1, C2, Tg, Ea) if anchor is not None else 0.0)
+
+    def fit_at(Tg, free_Tg=False, span=0.0, start=None):
+        floor = T_ref - Tg + (span if free_Tg else 0.0)
+        if start is None:
+            above = T >= Tg
+            anchor_above = (anchor if anchor is not None and above[anchor] else None)
+            idx = np.flatnonzero(above)
+            a = int(np.flatnonzero(idx == anchor_above)[0]) if anchor_above is not None else None
+            try:
+                C1, C2, _ = fit_wlf(T[above], L0[above], T_ref, anchor=a)
+            except (ValueError, np.linalg.LinAlgError):
+                C1, C2 = 10.0, 100.0
+            C2 = max(C2, floor + 1.0)
+            W = wlf_log10_shift(Tg, T_ref, C1, C2) - (wlf_log10_shift(T0, T_ref, C1, C2) if anchor is not None else 0)
+            x = 1.0 / T[~above] - 1.0 / Tg
+            slope = float(np.dot(x, L0[~above] - W) / np.dot(x, x)) if x.size else 1e4
+            start = [C1, C2, Tg, max(slope * k, 1.0)]
+        C1, C2, _, Ea = start
+        p0 = [C1, np.log(max(C2 - floor, 1e-6)), np.log(Ea)] + ([Tg] if free_Tg else [])
+
+        def unpack(p):
+            with np.errstate(over="ignore"):  # trial steps of the solver far out; the cost is then inf
+                return p[0], floor + np.exp(p[1]), (p[3] if free_Tg else Tg), np.exp(p[2])
+
+        lo = [-np.inf] * 3 + ([Tg - span] if free_Tg else [])
+        hi = [np.inf] * 3 + ([Tg + span] if free_Tg else [])
+        if free_Tg:
+            p0[3] = float(np.clip(start[2], lo[3] + 1e-9, hi[3] - 1e-9))
+        fit = least_squares(lambda p: (law(*unpack(p)) - L0) * weight, p0, bounds=(lo, hi), x_scale="jac",
+                            xtol=1e-15, ftol=1e-15, gtol=1e-15)
+        params = unpack(fit.x)
+        return float(np.sum(((law(*params) - L0) * weight) ** 2)), params
+
+    if T_g is not None:
+        _, params = fit_at(float(T_g))
+    else:
+        step = np.min(np.diff(T)) / 4.0
+        hi_Tg = min(T[-3], T_ref) if T.size >= 5 else T_ref
+        grid = np.arange(T[1], hi_Tg + 0.5 * step, step)
+        if grid.size == 0:
+            raise ValueError("too few temperatures to fit the glass transition: at least 5 are needed")
+        trials = [fit_at(Tg) for Tg in grid]
+        best = int(np.argmin([c for c, _ in trials]))
+        cost, params = trials[best]
+        refined = fit_at(float(grid[best]), free_Tg=True, span=step, start=params)
+        if refined[0] <= cost:
+            params = refined[1]
+    C1, C2, Tg, Ea = (float(v) for v in params)
+    return ShiftLaw(C1, C2, Tg, Ea, L0 - law(C1, C2, Tg, Ea))
+
+
 def _per_sweep_rms(r, sweep, n_T):
     """rms of the residual pairs (E', E'') of each sweep."""
     r = r.reshape(2, -1)
@@ -337,7 +456,7 @@ def bin_sweeps(sweep, logw, values, per_decade=20.0):
 
 
 def build_master_curve(T, sweep, omega, storage, loss, T_ref, method="overlap", vertical=False, quantity="moduli",
-                       min_overlap=0.5, knots_per_decade=2.0, C2=None):
+                       min_overlap=0.5, knots_per_decade=2.0, C2=None, law="wlf", T_g=None):
     """Shift multi-temperature sweeps onto one master curve at T_ref and fit the WLF law.
 
     ``method = "overlap"``: each sweep laid on its neighbour by the overlap of the two curves of
@@ -348,7 +467,9 @@ def build_master_curve(T, sweep, omega, storage, loss, T_ref, method="overlap", 
     shifts, then C1, C2 fitted to them. ``"wlf"``: C1, C2 fitted to the data directly (the same
     spline residual), started from the overlap shifts' law. ``vertical`` adds one log10 b_j per
     sweep (b = 1 at the sweep nearest T_ref). ``C2`` (K) fixes C2 of the law fitted to the shifts
-    (needed with two temperatures).
+    (needed with two temperatures). ``law = "wlf_arrhenius"`` fits WLF above T_g and Arrhenius below
+    to the shifts (:func:`fit_wlf_arrhenius`; T_g given or fitted as the breakpoint) instead of WLF
+    (``overlap`` and ``free`` only).
 
     Parameters
     ----------
@@ -404,6 +525,14 @@ def build_master_curve(T, sweep, omega, storage, loss, T_ref, method="overlap", 
         sigma = np.zeros(n_T)
         sigma[others] = np.sqrt(np.maximum(np.diag(cov), 0.0))
         sigma[j0] = np.min(sigma[others])
+    if law == "wlf_arrhenius":
+        if method == "wlf":
+            raise ValueError("the WLF-Arrhenius law is fitted to overlap or free shifts, not to the data directly")
+        fitted = fit_wlf_arrhenius(T, la, T_ref, anchor=j0, sigma=sigma, T_g=T_g)
+        log_a = la + wlf_arrhenius_log10_shift(T[j0], T_ref, fitted.C1, fitted.C2, fitted.T_g, fitted.E_a)
+        r = residual(log_a, lb)
+        return Shifts(log_a, lb, fitted.C1, fitted.C2, float(T_ref), _per_sweep_rms(r, sweep, n_T), fitted.residual,
+                      overlap, misfit, edge, law, fitted.T_g, fitted.E_a)
     C1, C2, wres = fit_wlf(T, la, T_ref, anchor=j0, sigma=sigma, C2=C2)
     log_a = la + wlf_log10_shift(T[j0], T_ref, C1, C2)
     if method == "wlf":

@@ -191,8 +191,47 @@ def wlf_log10_shift(T, T_ref, C1, C2):
     return -C1 * dT / (C2 + dT)
 
 
+#: gas constant (J/(mol K))
+GAS_CONSTANT = 8.314462618
+
+
+def wlf_arrhenius_log10_shift(T, T_ref, C1, C2, T_g, E_a):
+    """WLF above the glass transition T_g, Arrhenius below it, continuous in log10 a_T at T_g.
+
+    .. math:: \\log_{10} a_T = \\begin{cases} W(T) & T \\ge T_g \\\\
+              W(T_g) + \\dfrac{E_a}{R \\ln 10}\\left(\\dfrac{1}{T} - \\dfrac{1}{T_g}\\right) & T < T_g \\end{cases}
+
+    with W the WLF law (:func:`wlf_log10_shift`) about T_ref.
+
+    Parameters
+    ----------
+    T, T_ref : float or array
+        Temperature and reference temperature (K); T_ref >= T_g, so that a_T(T_ref) = 1.
+    C1, C2 : float
+        WLF constants (dimensionless; K). Needs C2 + T_g - T_ref > 0.
+    T_g : float
+        Glass-transition temperature where the law changes branch (K).
+    E_a : float
+        Activation energy of the Arrhenius branch (J/mol).
+
+    Returns
+    -------
+    float or array
+        log10 a_T.
+
+    References
+    ----------
+    docs/theory.md, section "Master curves from DMA data"; Ferry, Viscoelastic Properties of Polymers,
+    3rd ed. (1980), ch. 11.
+    """
+    T = np.asarray(T, dtype=float)
+    glassy = wlf_log10_shift(T_g, T_ref, C1, C2) + E_a / (GAS_CONSTANT * np.log(10.0)) * (1.0 / T - 1.0 / T_g)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(T >= T_g, wlf_log10_shift(T, T_ref, C1, C2), glassy)
+
+
 def shift_factors(T, T_ref, horizontal="none", vertical="none", C1=17.44, C2=51.6,
-                  table_T=None, table_log10_aT=None, table_log10_bT=None):
+                  table_T=None, table_log10_aT=None, table_log10_bT=None, T_g=None, E_a=None):
     """Horizontal and vertical shift factors of time-temperature superposition.
 
     .. math:: E(\\omega, T) = b_T \\, E(\\omega a_T, T_\\mathrm{ref})
@@ -203,8 +242,9 @@ def shift_factors(T, T_ref, horizontal="none", vertical="none", C1=17.44, C2=51.
         Temperatures (K).
     T_ref : float or None
         Reference temperature (K); needed unless both shifts are ``"none"``.
-    horizontal : {"none", "wlf", "table"}
-        a_T = 1, the WLF law (:func:`wlf_log10_shift` with ``C1``, ``C2`` in K), or log10 a_T
+    horizontal : {"none", "wlf", "wlf_arrhenius", "table"}
+        a_T = 1, the WLF law (:func:`wlf_log10_shift` with ``C1``, ``C2`` in K), WLF above ``T_g``
+        (K) and Arrhenius with ``E_a`` (J/mol) below (:func:`wlf_arrhenius_log10_shift`), or log10 a_T
         interpolated linearly in T in the table (``table_T`` in K, ``table_log10_aT``).
     vertical : {"none", "entropic", "table"}
         b_T = 1, b_T = T / T_ref (entropic elasticity), or log10 b_T interpolated linearly in T
@@ -221,6 +261,8 @@ def shift_factors(T, T_ref, horizontal="none", vertical="none", C1=17.44, C2=51.
     """
     if horizontal == "wlf":
         log_aT = wlf_log10_shift(T, T_ref, C1, C2)
+    elif horizontal == "wlf_arrhenius":
+        log_aT = wlf_arrhenius_log10_shift(T, T_ref, C1, C2, T_g, E_a)
     elif horizontal == "table":
         log_aT = np.interp(T, np.atleast_1d(table_T), np.atleast_1d(table_log10_aT))
     else:

@@ -200,9 +200,12 @@ def _shift_factors(spec, T: np.ndarray) -> tuple[np.ndarray, np.ndarray, str]:
     range is a UserError naming modulus.T."""
     shift, vertical, T_ref = spec["shift"], spec["vertical_shift"], spec["T_ref"]
     log_aT, b_T = shift_factors(T, T_ref, shift, vertical, spec["C1"], spec["C2"], spec["shift_T"],
-                                spec["shift_log10_aT"], spec["shift_log10_bT"])
-    if shift == "wlf":
+                                spec["shift_log10_aT"], spec["shift_log10_bT"], spec.get("T_g"), spec.get("E_a"))
+    if shift in ("wlf", "wlf_arrhenius"):
         how = f"WLF: log10 a_T = -{spec['C1']:g} (T - {T_ref:g} K) / ({spec['C2']:g} K + T - {T_ref:g} K)"
+        if shift == "wlf_arrhenius":
+            how += (f" for T >= T_g = {spec['T_g']:.6g} K; below, Arrhenius: log10 a_T = log10 a_T(T_g) + "
+                    f"E_a / (R ln 10) (1/T - 1/T_g) with E_a = {spec['E_a'] / 1e3:.6g} kJ/mol")
     elif shift == "table":
         how = "a_T from the scene's shift table (log10 a_T linear in T between entries)"
     else:
@@ -334,6 +337,8 @@ def compute_modulus(inp: StageInput) -> xr.Dataset:
 def _check_wlf(spec) -> None:
     """The fitted WLF law is finite at the scene's temperatures (T > T_ref - C2)."""
     T = np.atleast_1d(np.asarray(spec["T"], dtype=float))
+    if spec["shift"] == "wlf_arrhenius":
+        T = T[T >= spec["T_g"]]  # below T_g the Arrhenius branch holds (the fit keeps C2 > T_ref - T_g)
     if np.any(spec["C2"] + T - spec["T_ref"] <= 0):
         raise UserError(f"the WLF law fitted to the DMA sweeps is singular at T <= T_ref - C2 = "
                         f"{spec['T_ref'] - spec['C2']:.6g} K; use temperatures above it", key="modulus.T")
@@ -345,8 +350,11 @@ def _law_variables(spec) -> dict:
     out = {}
     if spec["T_ref"] is not None:
         out["reference_temperature"] = xr.DataArray(float(spec["T_ref"]))
-    if spec["shift"] == "wlf":
+    if spec["shift"] in ("wlf", "wlf_arrhenius"):
         out["wlf_C1"], out["wlf_C2"] = xr.DataArray(float(spec["C1"])), xr.DataArray(float(spec["C2"]))
+    if spec["shift"] == "wlf_arrhenius":
+        out["glass_transition_temperature"] = xr.DataArray(float(spec["T_g"]))
+        out["arrhenius_activation_energy"] = xr.DataArray(float(spec["E_a"]))
     table = {"shift_table_log10_aT": spec["shift_log10_aT"] if spec["shift"] == "table" else None,
              "shift_table_log10_bT": spec["shift_log10_bT"] if spec["vertical_shift"] == "table" else None}
     for name, values in table.items():
@@ -384,6 +392,12 @@ register(
                                          attrs={"comment": "of the temperature shift"}),
             "wlf_C1": Var("1", "WLF constant C1", attrs={"comment": "log10 a_T = -C1 (T - T_ref) / (C2 + T - T_ref)"}),
             "wlf_C2": Var("K", "WLF constant C2"),
+            "glass_transition_temperature": Var("K", "glass transition T_g of the WLF-Arrhenius law",
+                                                attrs={"comment": "WLF above T_g, Arrhenius below (shift_law = "
+                                                                  "wlf_arrhenius)"}),
+            "arrhenius_activation_energy": Var("J/mol", "activation energy E_a below T_g",
+                                               attrs={"comment": "log10 a_T = log10 a_T(T_g) + E_a / (R ln 10) "
+                                                                 "(1/T - 1/T_g) for T < T_g"}),
             "shift_table_log10_aT": Var("1", "log10 a_T of the shift table"),
             "shift_table_log10_bT": Var("1", "log10 b_T of the shift table (vertical shift)"),
             **DMA_OUTPUTS,

@@ -31,13 +31,14 @@ C1, C2, T_REF = 10.0, 60.0, 273.15
 FREQS = np.logspace(-1, 2, 13)
 
 
-def sweeps(temps_C, noise=0.01, seed=1, vertical=False, freqs=FREQS):
-    """(T (K) per point, sweep index, omega (rad/s), E', E'' (Pa)) of synthetic DMA sweeps."""
+def sweeps(temps_C, noise=0.01, seed=1, vertical=False, freqs=FREQS, law=None):
+    """(T (K) per point, sweep index, omega (rad/s), E', E'' (Pa)) of synthetic DMA sweeps; ``law``:
+    T -> log10 a_T (default WLF with C1, C2 about T_REF)."""
     rng = np.random.default_rng(seed)
     T = np.repeat(273.15 + np.asarray(temps_C, float), freqs.size)
     sweep = np.repeat(np.arange(len(temps_C)), freqs.size)
     omega = np.tile(2 * np.pi * freqs, len(temps_C))
-    aT = 10.0 ** ve.wlf_log10_shift(T, T_REF, C1, C2)
+    aT = 10.0 ** (law(T) if law is not None else ve.wlf_log10_shift(T, T_REF, C1, C2))
     Ep, Epp = ve.prony_modulus(omega * aT, E_RELAXED, STRENGTH, TAU)
     b = T / T_REF if vertical else 1.0
     Ep, Epp = b * Ep, b * Epp
@@ -399,3 +400,84 @@ def test_a_real_instrument_export_reads_the_same_as_csv_and_as_excel():
     for field in ("temperatures", "omega", "storage", "loss"):
         np.testing.assert_allclose(getattr(xls, field), getattr(csv, field), rtol=1e-8)
     assert csv.omega.min() == pytest.approx(2 * np.pi * 0.1) and csv.storage.max() > 8e9
+
+
+# ----------------------------------------------------------------------------------------
+# WLF above T_g, Arrhenius below (shift_law = "wlf_arrhenius")
+# ----------------------------------------------------------------------------------------
+
+#: the glassy branch of the known material: Arrhenius below -20 degC
+T_G, E_A = 253.15, 200e3
+STEP5 = np.arange(-40.0, 41.0, 5.0)
+
+
+def wlf_arrhenius(T):
+    return ve.wlf_arrhenius_log10_shift(T, T_REF, C1, C2, T_G, E_A)
+
+
+@pytest.mark.parametrize("given", [None, T_G], ids=["T_g fitted", "T_g given"])
+@pytest.mark.parametrize("noise", [0.0, 0.02])
+def test_wlf_arrhenius_fit_recovers_the_law_from_its_shifts(given, noise):
+    T = 273.15 + STEP5
+    j0 = int(np.argmin(np.abs(T - T_REF)))
+    L = wlf_arrhenius(T) + np.random.default_rng(3).normal(0.0, noise, T.size)
+    law = mc.fit_wlf_arrhenius(T, L - L[j0], T_REF, anchor=j0, T_g=given)
+    assert law.E_a == pytest.approx(E_A, rel=0.02)
+    assert law.C1 == pytest.approx(C1, rel=0.02)
+    assert law.C2 == pytest.approx(C2, rel=0.02)
+    assert law.T_g == pytest.approx(T_G, abs=1.0)
+    # continuous at T_g: the two branches meet there
+    below = ve.wlf_arrhenius_log10_shift(law.T_g - 1e-9, T_REF, law.C1, law.C2, law.T_g, law.E_a)
+    assert below == pytest.approx(ve.wlf_log10_shift(law.T_g, T_REF, law.C1, law.C2), abs=1e-6)
+    if noise:
+        assert np.sqrt(np.mean(law.residual ** 2)) < 2 * noise
+    # WLF alone cannot follow the bend: its residual is far larger
+    wlf_only = mc.fit_wlf(T, L - L[j0], T_REF, anchor=j0)[2]
+    assert np.abs(wlf_only).max() > 5 * max(np.abs(law.residual).max(), noise)
+
+
+def test_wlf_arrhenius_does_no_worse_than_wlf_on_pure_wlf_shifts():
+    T = 273.15 + STEP5
+    j0 = int(np.argmin(np.abs(T - T_REF)))
+    L = ve.wlf_log10_shift(T, T_REF, C1, C2) + np.random.default_rng(4).normal(0.0, 0.02, T.size)
+    wlf = mc.fit_wlf(T, L - L[j0], T_REF, anchor=j0)[2]
+    law = mc.fit_wlf_arrhenius(T, L - L[j0], T_REF, anchor=j0)
+    assert np.sum(law.residual ** 2) <= np.sum(wlf ** 2) * (1 + 1e-9)
+
+
+def test_stage_fits_wlf_arrhenius_and_the_friction_law_reads_it_back(tmp_path):
+    from roughcontact.stages.shared.flash import temperature_law
+
+    T, sweep, w, Ep, Epp = sweeps(STEP5, noise=0.005, law=wlf_arrhenius)
+    path = write_dma(tmp_path / "dma.txt", T, w, Ep, Epp)
+    mod = _run(_scene(path, shift_law="wlf_arrhenius", shift_on="moduli", T_ref="0 degC"), tmp_path)
+    assert mod.attrs["horizontal_shift"] == "wlf_arrhenius"
+    assert float(mod["arrhenius_activation_energy"]) == pytest.approx(E_A, rel=0.02)
+    assert float(mod["wlf_C1"]) == pytest.approx(C1, rel=0.02)
+    assert float(mod["wlf_C2"]) == pytest.approx(C2, rel=0.02)
+    assert float(mod["glass_transition_temperature"]) == pytest.approx(T_G, abs=1.5)
+    assert mod["arrhenius_activation_energy"].attrs["units"] == "J/mol"
+    # the law the friction stage reads from the stored result is the fitted one, on both branches
+    Ts = np.linspace(230.0, 320.0, 37)
+    fitted = ve.wlf_arrhenius_log10_shift(Ts, float(mod["reference_temperature"]), float(mod["wlf_C1"]),
+                                          float(mod["wlf_C2"]), float(mod["glass_transition_temperature"]),
+                                          float(mod["arrhenius_activation_energy"]))
+    np.testing.assert_allclose(temperature_law(mod)(Ts)[0], fitted, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(temperature_law(mod)(Ts)[0], wlf_arrhenius(Ts), atol=0.1)
+    # and the residual per sweep is about the fitted law
+    np.testing.assert_allclose(mod["sweep_log10_aT"].values - mod["sweep_wlf_residual"].values,
+                               temperature_law(mod)(mod["shift_T"].values)[0], atol=1e-9)
+
+
+@pytest.mark.parametrize("extra, key, message", [
+    ({"fit": "wlf"}, "modulus.shift_law", "set fit = \"overlap\""),
+    ({"T_g": "10 degC"}, "modulus.T_g", "above T_ref"),
+    ({"T_g": "-60 degC"}, "modulus.T_g", "0 sweep.s. below it"),
+])
+def test_wlf_arrhenius_refusals_name_the_key_and_write_nothing(tmp_path, extra, key, message):
+    T, sweep, w, Ep, Epp = sweeps(STEP5, law=wlf_arrhenius)
+    path = write_dma(tmp_path / "dma.txt", T, w, Ep, Epp)
+    with pytest.raises(UserError, match=message) as err:
+        _run(_scene(path, shift_law="wlf_arrhenius", T_ref="0 degC", **extra), tmp_path)
+    assert err.value.key == key
+    assert not list((tmp_path / "out").rglob("*.nc"))

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from roughcontact.physics.viscoelastic import prony_modulus, wlf_log10_shift
+from roughcontact.physics.viscoelastic import prony_modulus, wlf_arrhenius_log10_shift, wlf_log10_shift
 
 from .common import legend_outside
 
@@ -40,8 +40,17 @@ def figure_master_curve(results):
     T_line = np.linspace(temps.min() - 5, temps.max() + 5, 200)
     T_line = T_line[C2 + T_line - T_ref > 1.0]
     right.plot(temps - 273.15, ds["sweep_log10_aT"].values, "o", color="0.25", label="shift of each sweep")
-    right.plot(T_line - 273.15, wlf_log10_shift(T_line, T_ref, C1, C2), "k-",
-               label=f"WLF: C1 = {C1:.4g}, C2 = {C2:.4g} K")
+    if "glass_transition_temperature" in ds:
+        Tg, Ea = float(ds["glass_transition_temperature"]), float(ds["arrhenius_activation_energy"])
+        T_line = np.linspace(temps.min() - 5, temps.max() + 5, 200)
+        T_line = T_line[(T_line < Tg) | (C2 + T_line - T_ref > 1.0)]
+        right.plot(T_line - 273.15, wlf_arrhenius_log10_shift(T_line, T_ref, C1, C2, Tg, Ea), "k-",
+                   label=f"WLF: C1 = {C1:.4g}, C2 = {C2:.4g} K; Arrhenius below T_g = {Tg - 273.15:.4g} °C: "
+                         f"E_a = {Ea / 1e3:.4g} kJ/mol")
+        right.axvline(Tg - 273.15, color="0.6", lw=0.8, ls="--")
+    else:
+        right.plot(T_line - 273.15, wlf_log10_shift(T_line, T_ref, C1, C2), "k-",
+                   label=f"WLF: C1 = {C1:.4g}, C2 = {C2:.4g} K")
     right.axvline(T_ref - 273.15, color="0.6", lw=0.8, ls=":")
     right.set_xlabel("temperature (°C)")
     right.set_ylabel("log10 a_T")

@@ -93,20 +93,22 @@ def check_flash(inp) -> tuple[float, float, float] | None:
 
 
 def temperature_law(mod: xr.Dataset):
-    """T -> (log10 a_T, b_T) of the modulus stage's result (its WLF constants, shift table and
-    vertical shift), with which E(omega, T) = b_T E(omega a_T, T_ref)."""
+    """T -> (log10 a_T, b_T) of the modulus stage's result (its WLF constants, with the WLF-Arrhenius
+    law T_g and E_a, shift table and vertical shift), with which E(omega, T) = b_T E(omega a_T, T_ref)."""
     horizontal = mod.attrs.get("horizontal_shift", "none")
     vertical = mod.attrs.get("vertical_shift", "none")
     T_ref = float(mod["reference_temperature"]) if "reference_temperature" in mod else None
     C1 = float(mod["wlf_C1"]) if "wlf_C1" in mod else 17.44
     C2 = float(mod["wlf_C2"]) if "wlf_C2" in mod else 51.6
+    T_g = float(mod["glass_transition_temperature"]) if "glass_transition_temperature" in mod else None
+    E_a = float(mod["arrhenius_activation_energy"]) if "arrhenius_activation_energy" in mod else None
     table_T = mod["shift_T"].values if "shift_T" in mod.coords else None
     log_aT = mod["shift_table_log10_aT"].values if "shift_table_log10_aT" in mod else None
     log_bT = mod["shift_table_log10_bT"].values if "shift_table_log10_bT" in mod else None
 
     def law(T):
         T = np.asarray(T, dtype=float)
-        log_a, b = shift_factors(T.ravel(), T_ref, horizontal, vertical, C1, C2, table_T, log_aT, log_bT)
+        log_a, b = shift_factors(T.ravel(), T_ref, horizontal, vertical, C1, C2, table_T, log_aT, log_bT, T_g, E_a)
         return np.reshape(log_a, T.shape), np.reshape(b, T.shape)
 
     return law

@@ -16,6 +16,7 @@ import numpy as np
 import xarray as xr
 
 from roughcontact.physics.mastercurve import (
+    SHIFT_LAWS,
     SHIFT_QUANTITIES,
     bin_sweeps,
     build_master_curve,
@@ -52,6 +53,12 @@ DMA_PARAMS = (
     Param("fit", "choice", default="overlap", choices=("overlap", "wlf", "free"),
           doc="horizontal shifts: each sweep laid on its neighbour by their overlap, chained from T_ref, then WLF "
               "fitted to them (overlap); WLF fitted to all data (wlf); one shift per sweep by a global fit (free)"),
+    Param("shift_law", "choice", default="wlf", choices=SHIFT_LAWS,
+          doc="law fitted to the shifts: WLF, or WLF above T_g and Arrhenius below (continuous at T_g; "
+              "with fit = overlap or free)"),
+    Param("T_g", "quantity", "K", default=None, lo=0.0, lo_open=True,
+          doc="shift_law = wlf_arrhenius: glass transition where the law turns Arrhenius (default: fitted as the "
+              "breakpoint)"),
     Param("shift_on", "choice", default="storage", choices=SHIFT_QUANTITIES,
           doc="what the overlap shifts superpose: storage (E'), loss (E''), moduli (both), tan_delta, complex (|E*|)"),
     Param("min_overlap", "quantity", "", default=0.5, lo=0.0, lo_open=True,
@@ -76,7 +83,8 @@ DMA_OUTPUTS = {
                                 attrs={"comment": "rms of log10 E' and log10 E'' of each sweep about the shifted "
                                                   "master curve"}),
     "sweep_wlf_residual": Var("1", "WLF residual of log10 a_T (decades)", optional=True,
-                              attrs={"comment": "log10 a_T of each sweep minus the fitted WLF law"}),
+                              attrs={"comment": "log10 a_T of each sweep minus the fitted shift law (WLF or "
+                                                  "WLF-Arrhenius, shift_law)"}),
     "sweep_overlap": Var("1", "overlap with the neighbour sweep (decades)", optional=True,
                          attrs={"comment": "overlap with the neighbour it was shifted onto: log10 frequency range "
                                            "both sweeps cover after the overlap shift; each sweep is laid on its "
@@ -127,11 +135,47 @@ class MasterCurve(NamedTuple):
     point_T: np.ndarray
     overlap: np.ndarray
     misfit: np.ndarray
+    law: str = "wlf"
+    T_g: float = float("nan")
+    E_a: float = float("nan")
+
+
+def _reference(spec, T) -> float:
+    """T_ref of the master curve: the scene's, else the sweep temperature nearest the median."""
+    return spec["T_ref"] if spec["T_ref"] is not None else float(T[np.argmin(np.abs(T - np.median(T)))])
+
+
+def _check_law(spec, data) -> None:
+    """shift_law = "wlf_arrhenius": fitted to overlap or free shifts, T_g below T_ref with sweeps on both
+    sides (or enough sweeps to find it)."""
+    if spec["shift_law"] != "wlf_arrhenius":
+        return
+    if spec["fit"] == "wlf":
+        raise UserError("shift_law = \"wlf_arrhenius\" is fitted to the sweeps' shifts: set fit = \"overlap\" or "
+                        "\"free\"", key="modulus.shift_law")
+    if data is None:
+        return
+    T = data.temperatures
+    T_ref = _reference(spec, T)
+    if spec["T_g"] is None:
+        if T.size < 5:
+            raise UserError(f"fitting T_g as the breakpoint needs at least 5 temperatures, the file has {T.size}: "
+                            "give modulus.T_g", key="modulus.shift_law")
+        return
+    Tg = spec["T_g"]
+    if Tg > T_ref:
+        raise UserError(f"T_g = {Tg:.6g} K is above T_ref = {T_ref:.6g} K: the WLF branch holds at T_ref "
+                        "(a_T = 1 there); set T_ref above T_g", key="modulus.T_g")
+    below, above = int(np.sum(T < Tg)), int(np.sum(T >= Tg))
+    if below < 1 or above < 3:
+        raise UserError(f"T_g = {Tg:.6g} K leaves {below} sweep(s) below it and {above} at or above: the Arrhenius "
+                        "branch needs one, the WLF branch three", key="modulus.T_g")
 
 
 def check_dma(spec, data) -> None:
     """Rules between the [modulus] keys and the DMA file: two temperatures give one relative shift,
-    which cannot fix both WLF constants."""
+    which cannot fix both WLF constants; the WLF-Arrhenius law's T_g and sweeps."""
+    _check_law(spec, data)
     if data is None or data.temperatures.size > 2:
         return
     listed = " and ".join(f"{T - 273.15:.4g} °C" for T in data.temperatures)
@@ -175,7 +219,7 @@ def master_curve(spec, data) -> MasterCurve:
     """Shift the sweeps of ``data`` (:class:`roughcontact.dma.DMASweeps`) to T_ref, fit the WLF law
     and the spectrum, run the Kramers-Kronig check and warn (naming the temperatures) where it fails."""
     T = data.temperatures
-    T_ref = spec["T_ref"] if spec["T_ref"] is not None else float(T[np.argmin(np.abs(T - np.median(T)))])
+    T_ref = _reference(spec, T)
     sweep, omega, storage_raw, loss_raw = _binned(data, spec["bins_per_decade"])
     two = T.size == 2
     if two:
@@ -184,7 +228,7 @@ def master_curve(spec, data) -> MasterCurve:
                       "third temperature", UserWarning, stacklevel=2)
     shifts = build_master_curve(T, sweep, omega, storage_raw, loss_raw, T_ref, spec["fit"],
                                 spec["vertical_fit"] == "free", spec["shift_on"], spec["min_overlap"],
-                                C2=spec["C2"] if two else None)
+                                C2=spec["C2"] if two else None, law=spec["shift_law"], T_g=spec["T_g"])
     _warn_overlap(spec, data, shifts, T)
     reduced = omega * 10.0 ** shifts.log10_aT[sweep]
     b = 10.0 ** shifts.log10_bT[sweep]
@@ -201,7 +245,7 @@ def master_curve(spec, data) -> MasterCurve:
                       "not superpose", UserWarning, stacklevel=2)
     return MasterCurve(float(T_ref), shifts.C1, shifts.C2, T, shifts.log10_aT, shifts.log10_bT, shifts.residual,
                        shifts.wlf_residual, kk, E0, moduli, times, fit_residual, reduced, storage, loss,
-                       T[sweep], shifts.overlap, shifts.misfit)
+                       T[sweep], shifts.overlap, shifts.misfit, shifts.law, shifts.T_g, shifts.E_a)
 
 
 def model(curve: MasterCurve):
@@ -209,7 +253,9 @@ def model(curve: MasterCurve):
     attrs = {"model_formula": "generalized Maxwell fitted to the DMA master curve (non-negative moduli): "
                               "E = E0 + sum_k E_k i w tau_k / (1 + i w tau_k)",
              "model_parameters": json.dumps({"E0": curve.E0, "terms": int(np.count_nonzero(curve.moduli))}),
-             "wlf_fit": f"C1 = {curve.C1:.6g}, C2 = {curve.C2:.6g} K, T_ref = {curve.T_ref:.6g} K",
+             "wlf_fit": f"C1 = {curve.C1:.6g}, C2 = {curve.C2:.6g} K, T_ref = {curve.T_ref:.6g} K"
+                        + (f"; Arrhenius below T_g = {curve.T_g:.6g} K with E_a = {curve.E_a / 1e3:.6g} kJ/mol"
+                           if curve.law == "wlf_arrhenius" else ""),
              "measured_reduced_omega_range": f"{curve.reduced_omega.min():.6g} {curve.reduced_omega.max():.6g} rad/s"}
     return (lambda w: prony_modulus(w, curve.E0, curve.moduli, curve.times)), attrs
 
@@ -217,7 +263,8 @@ def model(curve: MasterCurve):
 def shift_spec(spec, curve: MasterCurve) -> dict:
     """The [modulus] values with the fitted temperature law in place of the scene's shift keys."""
     vertical = spec["vertical_fit"] == "free"
-    return dict(spec, shift="wlf", C1=curve.C1, C2=curve.C2, T_ref=curve.T_ref, shift_T=curve.temperatures,
+    return dict(spec, shift=curve.law, C1=curve.C1, C2=curve.C2, T_ref=curve.T_ref, T_g=curve.T_g, E_a=curve.E_a,
+                shift_T=curve.temperatures,
                 shift_log10_aT=None, vertical_shift="table" if vertical else "none",
                 shift_log10_bT=curve.log10_bT if vertical else None)
 
