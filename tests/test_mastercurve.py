@@ -316,8 +316,24 @@ def test_stage_reports_overlap_and_misfit_per_sweep_and_can_refuse_a_gap(tmp_pat
     # 40 K apart, 3-decade sweeps: the true shift leaves no overlap; refused naming both temperatures
     T, sweep, w, Ep, Epp = sweeps(np.array([-20.0, 20.0, 60.0]))
     path = write_dma(tmp_path / "gap.txt", T, w, Ep, Epp)
-    with pytest.raises(UserError, match=r"20 °C on -20 °C"):
+    with pytest.raises(UserError, match=r"20 °C on -20 °C") as err:
         _run(_scene(path, no_overlap="error", shift_on="moduli"), tmp_path / "b")
+    assert err.value.key == "modulus.no_overlap"
+
+
+def test_a_gap_refused_with_no_overlap_error_is_refused_before_anything_is_written(tmp_path, monkeypatch):
+    from roughcontact.stages.shared import mastercurve as shared
+
+    T, sweep, w, Ep, Epp = sweeps(np.array([-20.0, 20.0, 60.0]))
+    path = write_dma(tmp_path / "gap.txt", T, w, Ep, Epp)
+    fitted = []
+    monkeypatch.setattr(shared, "build_master_curve", lambda *a, **k: fitted.append(1))
+    raw = _scene(path, no_overlap="error", shift_on="moduli")
+    raw["outputs"]["variables"] += ["contact_area_ratio"]
+    with pytest.raises(UserError, match=r"20 °C on -20 °C") as err:
+        _run(raw, tmp_path)
+    assert err.value.key == "modulus.no_overlap" and not fitted  # the preflight, not the fit, refused
+    assert not [f for f in (tmp_path / "out").rglob("*") if f.is_file()]
 
 
 # the same 6 points in every form an instrument writes

@@ -22,6 +22,7 @@ from roughcontact.physics.mastercurve import (
     build_master_curve,
     fit_prony,
     kramers_kronig_deviation,
+    overlap_shifts,
     relaxation_times,
 )
 from roughcontact.physics.viscoelastic import loss_modulus_from_tan_delta, prony_modulus
@@ -174,8 +175,10 @@ def _check_law(spec, data) -> None:
 
 def check_dma(spec, data) -> None:
     """Rules between the [modulus] keys and the DMA file: two temperatures give one relative shift,
-    which cannot fix both WLF constants; the WLF-Arrhenius law's T_g and sweeps."""
+    which cannot fix both WLF constants; the WLF-Arrhenius law's T_g and sweeps; with no_overlap = "error",
+    neighbouring sweeps whose overlap does not fix their shift."""
     _check_law(spec, data)
+    _overlap_refusal(spec, data)
     if data is None or data.temperatures.size > 2:
         return
     listed = " and ".join(f"{T - 273.15:.4g} °C" for T in data.temperatures)
@@ -198,11 +201,25 @@ def _binned(data, per_decade):
     return sweep, 10.0 ** lw, 10.0 ** l1, 10.0 ** l2
 
 
-def _warn_overlap(spec, data, shifts, T) -> None:
+def _overlap_refusal(spec, data) -> None:
+    """no_overlap = "error": the overlap shifts found in the preflight (from the file the stage's check
+    has read), so the refusal comes before anything is written."""
+    if spec["no_overlap"] != "error" or data is None or data.temperatures.size < 2:
+        return
+    T = data.temperatures
+    sweep, omega, storage, loss = _binned(data, spec["bins_per_decade"])
+    l1, l2 = np.log10(storage), np.log10(np.maximum(loss, 1e-12 * storage))
+    j0 = int(np.argmin(np.abs(T - _reference(spec, T))))
+    _, _, overlap, _, edge = overlap_shifts(np.log10(omega), l1, l2, sweep, T.size, j0, spec["shift_on"],
+                                            spec["vertical_fit"] == "free", spec["min_overlap"])
+    _warn_overlap(spec, data, overlap, edge, T)
+
+
+def _warn_overlap(spec, data, overlap, at_edge, T) -> None:
     """Warn (or refuse, with no_overlap = "error") naming both temperatures of each pair whose best
     shift leaves less overlap than min_overlap."""
-    j0 = int(np.nanargmin(np.where(np.isnan(shifts.overlap), 0.0, np.inf)))
-    pairs = [(j, j - 1 if j > j0 else j + 1) for j in np.flatnonzero(shifts.at_edge)]
+    j0 = int(np.nanargmin(np.where(np.isnan(overlap), 0.0, np.inf)))
+    pairs = [(j, j - 1 if j > j0 else j + 1) for j in np.flatnonzero(at_edge)]
     if not pairs:
         return
     listed = "; ".join(f"{T[j] - 273.15:.4g} °C on {T[k] - 273.15:.4g} °C" for j, k in pairs)
@@ -229,7 +246,7 @@ def master_curve(spec, data) -> MasterCurve:
     shifts = build_master_curve(T, sweep, omega, storage_raw, loss_raw, T_ref, spec["fit"],
                                 spec["vertical_fit"] == "free", spec["shift_on"], spec["min_overlap"],
                                 C2=spec["C2"] if two else None, law=spec["shift_law"], T_g=spec["T_g"])
-    _warn_overlap(spec, data, shifts, T)
+    _warn_overlap(spec, data, shifts.overlap, shifts.at_edge, T)  # with no_overlap = "error" refused in check_dma
     reduced = omega * 10.0 ** shifts.log10_aT[sweep]
     b = 10.0 ** shifts.log10_bT[sweep]
     storage, loss = storage_raw / b, np.maximum(loss_raw / b, 1e-12 * storage_raw / b)
