@@ -22,12 +22,13 @@ from roughcontact import engine, scene as scenes
 from roughcontact.stage import UserError, sections, stages
 
 #: small scenes per stage (its main output asked for); stages not here are listed in NOT_COVERED
+DATA = Path(__file__).resolve().parent.parent / "pipeline" / "scenes" / "data"
 E_STAR = 77.2e9 / (1 - 0.42**2)
 _SMALL = dict(interface={"eta": [0.0]}, load={"p": ["100 MPa", "3 GPa"]}, contact={"zeta": [4.0, 200.0]},
               numerics={"points_per_decade": 10})
 _SEAL = {"viscosity": "1 mPa*s", "pressure_drop": "1 kPa", "seal_width": "1 mm", "seal_length": "1 mm"}
 _BEM = {"grid": 32, "realizations": 1, "seed": 3, "pixels_per_wavelength": 4}
-SCENES = {
+SCENES: dict[str, dict] = {
     "contact": dict(outputs={"variables": ["contact_area_ratio"]}),
     "separation": dict(outputs={"variables": ["mean_separation"]}),
     "stiffness": dict(outputs={"variables": ["contact_stiffness"]}),
@@ -49,16 +50,23 @@ SCENES = {
                                "shear_c": 0.1, "shear_table_v": ["1e-8 m/s", "1 m/s"],
                                "shear_table_tau": ["1 MPa", "0.1 MPa"]},
                      numerics={"points_per_decade": 10, "friction_phi_nodes": 8}),
+    # bands over a measured surface (the built-in container) and a few draws: the contact, separation
+    # and friction bands, so every option of the stages it draws on is followed
+    "bands": dict(outputs={"variables": ["contact_area_ratio_band", "mean_separation_band",
+                                         "friction_coefficient_band"]},
+                  substrate={"kind": "container", "container": str(DATA / "substrate.zip"), "extend": "power_law"},
+                  solid={"kind": "smooth"}, interface={"eta": 0.0}, bands={"draws": 4}, contact={"zeta": [1.0, 100.0]},
+                  numerics={"points_per_decade": 20, "friction_phi_nodes": 8}),
     "interface_bem": dict(outputs={"variables": ["exact_leak_rate"]}, leakage=dict(_SEAL), bem=dict(_BEM),
                           substrate={"q0": "8e8 1/m"}, solid={"q0": "8e8 1/m"},
                           numerics={"points_per_decade": 10, "interface_bem_bisections": 2}),
 }
+SCENES["bands"].update({k: SCENES["friction"][k] for k in ("material", "load", "modulus", "friction")})
 #: stages that depend on a choice option but need inputs this test does not build (say why)
 NOT_COVERED = {
     "bem": "the BEM check of the contact stage (tamaas); its contact.correction is tested in tests/test_bem.py",
     "validation_bem": "lattice BEM validation (tamaas); tested in tests/test_validation.py",
     "validation": "lattice BEM validation (tamaas); tested in tests/test_validation.py",
-    "bands": "uncertainty bands over every stage (many draws); tested in tests/test_bands.py",
 }
 
 
@@ -94,14 +102,15 @@ CASES = [(st, key, value) for st in SCENES for key, values in options_of(st).ite
 def test_every_stage_with_a_choice_option_is_covered_or_says_why():
     dependent = {name for name in stages() if options_of(name)}
     assert dependent - set(SCENES) - set(NOT_COVERED) == set()
-    assert {"stiffness", "conductance", "leakage", "interface_bem"} <= set(SCENES)
+    assert {"stiffness", "conductance", "leakage", "interface_bem", "friction", "bands"} <= set(SCENES)
     assert ("leakage", "contact.correction", "yang_persson") in CASES  # found from the registry, not listed here
 
 
 def _scene(stage: str, key: str | None = None, value=None) -> dict:
     raw = make_scene(**copy.deepcopy(_SMALL))
     for table, content in copy.deepcopy(SCENES[stage]).items():
-        raw[table] = {**raw.get(table, {}), **content} if isinstance(content, dict) else content
+        merge = isinstance(content, dict) and "kind" not in content
+        raw[table] = {**raw.get(table, {}), **content} if merge else content
     if key is not None:
         section, _, name = key.partition(".")
         raw.setdefault(section, {})[name] = value
@@ -136,15 +145,20 @@ def _default_key(stage, tmp_path_factory) -> str:
 def test_stage_follows_the_option(stage, key, value, tmp_path_factory):
     if stage == "interface_bem":
         pytest.importorskip("tamaas")
+    default_key = _default_key(stage, tmp_path_factory)  # the small scene itself runs
     try:
-        ds = _run(_scene(stage, key, value), tmp_path_factory.mktemp(f"{stage}-{value}"))[stage]
+        res = _run(_scene(stage, key, value), tmp_path_factory.mktemp(f"{stage}-{value}"))
     except UserError as exc:  # refused in the preflight with a one-line message naming a key: allowed
         assert exc.key and "\n" not in str(exc), exc
         return
+    ds = res[stage]
     default = [p for p in sections()[key.partition(".")[0]].params if p.name == key.partition(".")[2]][0].default
     if value != default:
-        assert ds.attrs["stage_key"] != _default_key(stage, tmp_path_factory)
-    # the result says which theory it used, where the stage computes with the option itself
+        assert ds.attrs["stage_key"] != default_key
+    # the result says which theory it used, where the stage computes with the option itself (bands:
+    # the draws it takes the quantiles of, in the stage that computes with the option)
+    if stage == "bands":
+        ds = res["friction" if key.startswith("friction.") else "separation"]
     attr = key.replace(".", "_")
     if (key, value) in SAYS:
         attr, text = SAYS[key, value]
@@ -173,7 +187,6 @@ def test_contact_correction_moves_the_sealing_pressure_and_the_leak_rate(correct
 # -- choices read inside whole sections: the modulus kinds and shifts friction depends on, and the
 # -- measured-surface options of the psd stage (on the built-in example data)
 
-DATA = Path(__file__).resolve().parent.parent / "pipeline" / "scenes" / "data"
 _BOX = {"kind": "box", "E0": "5 MPa", "E_inf": "3 GPa", "tau1": "1e-6 s", "tau2": "1e4 s"}
 MODULI = {
     "box-wlf": None,  # the friction scene's own
