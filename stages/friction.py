@@ -250,6 +250,7 @@ def compute_friction(inp: StageInput) -> xr.Dataset:
                       f"grid ({grid[-1]:.3g} rad/s): extrapolated with E' constant, E'' ~ 1/omega; "
                       "raise modulus.omega_max if that is not the glassy plateau", UserWarning, stacklevel=2)
     ds.attrs = _attrs(grid, needed_hi, n_phi, n_seg, S_text, nu)
+    ds.attrs["contact_correction"] = area.attrs["area_correction"]  # the A/A0 theory (contact.correction)
     if thermal is not None:
         ds.attrs.update(flash_attrs(inp, thermal))
     if law is not None:
@@ -260,7 +261,7 @@ def compute_friction(inp: StageInput) -> xr.Dataset:
 STAGE = register(
     Stage(
         name="friction",
-        version="3",
+        version="4",
         compute=compute_friction,
         needs=("modulus", "psd"),
         check=_check,

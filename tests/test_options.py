@@ -13,6 +13,7 @@ option value is never reused for another.
 from __future__ import annotations
 
 import copy
+from pathlib import Path
 
 import pytest
 from conftest import make_scene
@@ -21,12 +22,13 @@ from roughcontact import engine, scene as scenes
 from roughcontact.stage import UserError, sections, stages
 
 #: small scenes per stage (its main output asked for); stages not here are listed in NOT_COVERED
+DATA = Path(__file__).resolve().parent.parent / "pipeline" / "scenes" / "data"
 E_STAR = 77.2e9 / (1 - 0.42**2)
 _SMALL = dict(interface={"eta": [0.0]}, load={"p": ["100 MPa", "3 GPa"]}, contact={"zeta": [4.0, 200.0]},
               numerics={"points_per_decade": 10})
 _SEAL = {"viscosity": "1 mPa*s", "pressure_drop": "1 kPa", "seal_width": "1 mm", "seal_length": "1 mm"}
 _BEM = {"grid": 32, "realizations": 1, "seed": 3, "pixels_per_wavelength": 4}
-SCENES = {
+SCENES: dict[str, dict] = {
     "contact": dict(outputs={"variables": ["contact_area_ratio"]}),
     "separation": dict(outputs={"variables": ["mean_separation"]}),
     "stiffness": dict(outputs={"variables": ["contact_stiffness"]}),
@@ -34,17 +36,37 @@ SCENES = {
                         conductance={"thermal_conductivity_substrate": "50 W/(m*K)",
                                      "thermal_conductivity_solid": "1 W/(m*K)"}),
     "leakage": dict(outputs={"variables": ["leak_rate_critical_junction"]}, leakage=dict(_SEAL)),
+    # a box modulus, flash temperature on (friction.background is read only with it) and the shear laws'
+    # parameters given (each is used only under its friction.shear kind): the defaults stay none
+    "friction": dict(outputs={"variables": ["friction_coefficient"]},
+                     substrate={"kind": "self_affine", "H": 0.9, "qL": "1e4 1/m", "q1": "1e7 1/m", "hrms": "3 um"},
+                     solid={"kind": "self_affine", "H": 0.8, "qL": "1e4 1/m", "q1": "1e7 1/m", "hrms": "4 um"},
+                     material={"E": "5 MPa", "nu": 0.5}, load={"p": "0.4 MPa"},
+                     modulus={"kind": "box", "E0": "5 MPa", "E_inf": "3 GPa", "tau1": "1e-6 s", "tau2": "1e4 s",
+                              "T_ref": "-40 degC", "T": "20 degC", "shift": "wlf", "C2": "51.6 K"},
+                     friction={"v": ["1e-3 m/s", "1 m/s"], "flash": True, "thermal_conductivity": "0.25 W/(m*K)",
+                               "density": "1200 kg/m^3", "heat_capacity": "1500 J/(kg*K)",
+                               "sliding_distance": "0.1 m", "shear_tau0": "1 MPa", "shear_v0": "1e-7 m/s",
+                               "shear_c": 0.1, "shear_table_v": ["1e-8 m/s", "1 m/s"],
+                               "shear_table_tau": ["1 MPa", "0.1 MPa"]},
+                     numerics={"points_per_decade": 10, "friction_phi_nodes": 8}),
+    # bands over a measured surface (the built-in container) and a few draws: the contact, separation
+    # and friction bands, so every option of the stages it draws on is followed
+    "bands": dict(outputs={"variables": ["contact_area_ratio_band", "mean_separation_band",
+                                         "friction_coefficient_band"]},
+                  substrate={"kind": "container", "container": str(DATA / "substrate.zip"), "extend": "power_law"},
+                  solid={"kind": "smooth"}, interface={"eta": 0.0}, bands={"draws": 4}, contact={"zeta": [1.0, 100.0]},
+                  numerics={"points_per_decade": 20, "friction_phi_nodes": 8}),
     "interface_bem": dict(outputs={"variables": ["exact_leak_rate"]}, leakage=dict(_SEAL), bem=dict(_BEM),
                           substrate={"q0": "8e8 1/m"}, solid={"q0": "8e8 1/m"},
                           numerics={"points_per_decade": 10, "interface_bem_bisections": 2}),
 }
+SCENES["bands"].update({k: SCENES["friction"][k] for k in ("material", "load", "modulus", "friction")})
 #: stages that depend on a choice option but need inputs this test does not build (say why)
 NOT_COVERED = {
-    "friction": "needs a viscoelastic modulus (DMA data); its options are tested in tests/test_friction.py",
     "bem": "the BEM check of the contact stage (tamaas); its contact.correction is tested in tests/test_bem.py",
     "validation_bem": "lattice BEM validation (tamaas); tested in tests/test_validation.py",
     "validation": "lattice BEM validation (tamaas); tested in tests/test_validation.py",
-    "bands": "uncertainty bands over every stage (many draws); tested in tests/test_bands.py",
 }
 
 
@@ -80,14 +102,15 @@ CASES = [(st, key, value) for st in SCENES for key, values in options_of(st).ite
 def test_every_stage_with_a_choice_option_is_covered_or_says_why():
     dependent = {name for name in stages() if options_of(name)}
     assert dependent - set(SCENES) - set(NOT_COVERED) == set()
-    assert {"stiffness", "conductance", "leakage", "interface_bem"} <= set(SCENES)
+    assert {"stiffness", "conductance", "leakage", "interface_bem", "friction", "bands"} <= set(SCENES)
     assert ("leakage", "contact.correction", "yang_persson") in CASES  # found from the registry, not listed here
 
 
 def _scene(stage: str, key: str | None = None, value=None) -> dict:
     raw = make_scene(**copy.deepcopy(_SMALL))
     for table, content in copy.deepcopy(SCENES[stage]).items():
-        raw[table] = {**raw.get(table, {}), **content} if isinstance(content, dict) else content
+        merge = isinstance(content, dict) and "kind" not in content
+        raw[table] = {**raw.get(table, {}), **content} if merge else content
     if key is not None:
         section, _, name = key.partition(".")
         raw.setdefault(section, {})[name] = value
@@ -97,6 +120,17 @@ def _scene(stage: str, key: str | None = None, value=None) -> dict:
 def _run(raw, outdir):
     return engine.run(scenes.from_dict(raw), outdir, report=engine.Reporter(None))["base"]
 
+
+#: (option, value) -> (global attribute, text it holds) for the options a stage states in its own words
+SAYS = {
+    ("friction.correction", "none"): ("area_factor", "S = 1"),
+    ("friction.correction", "yang_persson"): ("area_factor", "P^2"),
+    ("friction.shear", "none"): ("contact_shear", "none"),
+    ("friction.shear", "gaussian"): ("contact_shear", "exp("),
+    ("friction.shear", "table"): ("contact_shear", "table"),
+    ("friction.background", "none"): ("background_heating", "none"),
+    ("friction.background", "semi_infinite"): ("background_heating", "semi-infinite"),
+}
 
 _DEFAULTS: dict[str, str] = {}
 
@@ -111,16 +145,24 @@ def _default_key(stage, tmp_path_factory) -> str:
 def test_stage_follows_the_option(stage, key, value, tmp_path_factory):
     if stage == "interface_bem":
         pytest.importorskip("tamaas")
+    default_key = _default_key(stage, tmp_path_factory)  # the small scene itself runs
     try:
-        ds = _run(_scene(stage, key, value), tmp_path_factory.mktemp(f"{stage}-{value}"))[stage]
+        res = _run(_scene(stage, key, value), tmp_path_factory.mktemp(f"{stage}-{value}"))
     except UserError as exc:  # refused in the preflight with a one-line message naming a key: allowed
         assert exc.key and "\n" not in str(exc), exc
         return
+    ds = res[stage]
     default = [p for p in sections()[key.partition(".")[0]].params if p.name == key.partition(".")[2]][0].default
     if value != default:
-        assert ds.attrs["stage_key"] != _default_key(stage, tmp_path_factory)
-    # the result says which theory it used, where the stage computes with the option itself
+        assert ds.attrs["stage_key"] != default_key
+    # the result says which theory it used, where the stage computes with the option itself (bands:
+    # the draws it takes the quantiles of, in the stage that computes with the option)
+    if stage == "bands":
+        ds = res["friction" if key.startswith("friction.") else "separation"]
     attr = key.replace(".", "_")
+    if (key, value) in SAYS:
+        attr, text = SAYS[key, value]
+        assert text in str(ds.attrs.get(attr, "none")), (attr, ds.attrs.get(attr))
     if key in {"contact.correction", "separation.refinement"} and stage != "contact":
         said = f"{ds.attrs.get(attr, '')} {ds.attrs.get(attr + '_source', '')}"
         assert str(value) in said or (key == "separation.refinement" and value == "contact"
@@ -140,3 +182,80 @@ def test_contact_correction_moves_the_sealing_pressure_and_the_leak_rate(correct
         assert 0.5 < ratio < 1.0, ratio
         assert not (other[f"leak_rate_{method}"] == base[f"leak_rate_{method}"]).all()
     assert other.attrs["contact_correction"] == correction
+
+
+# -- choices read inside whole sections: the modulus kinds and shifts friction depends on, and the
+# -- measured-surface options of the psd stage (on the built-in example data)
+
+_BOX = {"kind": "box", "E0": "5 MPa", "E_inf": "3 GPa", "tau1": "1e-6 s", "tau2": "1e4 s"}
+MODULI = {
+    "box-wlf": None,  # the friction scene's own
+    "box-none": dict(_BOX, shift="none"),
+    "box-table": dict(_BOX, T_ref="-40 degC", T="20 degC", shift="table", shift_T=["-40 degC", "60 degC"],
+                      shift_log10_aT=[0.0, -8.0]),
+    "box-entropic": dict(_BOX, T_ref="-40 degC", T="20 degC", shift="wlf", vertical_shift="entropic"),
+    "prony": {"kind": "prony", "E0": "5 MPa", "prony_E": ["100 MPa", "1 GPa"], "prony_tau": ["1e-3 s", "1e-6 s"]},
+    "elastic": {"kind": "elastic", "E": "7 MPa"},
+    "dma-wlf": {"kind": "dma", "sweeps": str(DATA / "dma_example.txt"), "T_ref": "-20 degC", "T": "25 degC",
+                "fit": "wlf"},
+    "dma-free": {"kind": "dma", "sweeps": str(DATA / "dma_example.txt"), "T_ref": "-20 degC", "T": "25 degC",
+                 "fit": "free"},
+}
+
+
+@pytest.mark.parametrize("name", MODULI)
+def test_friction_follows_the_modulus_kind_and_shift(name, tmp_path_factory):
+    raw = _scene("friction")
+    if MODULI[name] is not None:
+        raw["modulus"] = copy.deepcopy(MODULI[name])
+    try:
+        res = _run(raw, tmp_path_factory.mktemp(f"modulus-{name}"))
+    except UserError as exc:
+        assert exc.key and "\n" not in str(exc), exc
+        return
+    mod, fric = res["modulus"], res["friction"]
+    assert (fric.attrs["stage_key"] == _default_key("friction", tmp_path_factory)) == (MODULI[name] is None)
+    assert mod.attrs["model"] == name.partition("-")[0]  # the modulus result says its kind and its shifts
+    shift = {"box-none": "none", "box-table": "table", "elastic": "none", "prony": "none"}.get(name, "wlf")
+    assert mod.attrs["horizontal_shift"] == shift
+    assert mod.attrs["vertical_shift"] == ("entropic" if name == "box-entropic" else "none")
+
+
+#: the [substrate] choices of a measured surface (kind topography: the built-in topography scene's maps)
+SURFACE_CHOICES = {key: values for key, values in _choices().items()
+                   if key.startswith("substrate.") and key.partition(".")[2] in
+                   {"fill_undefined", "analysis", "detrend", "window", "extend"}}
+SURFACE_CASES = [(key, value) for key, values in SURFACE_CHOICES.items() for value in values]
+
+
+def _topography(key=None, value=None) -> dict:
+    raw = make_scene(substrate={"kind": "topography", "files": [str(DATA / "substrate_map.npy")], "height_unit": "nm",
+                                "size_x": "20 um", "periodic": False},
+                     solid={"kind": "smooth"}, interface={"eta": 0.0}, material={"E": "10 MPa", "nu": 0.5},
+                     load={"p": ["10 kPa", "1 MPa"]}, contact={"zeta": [1.0, 10.0]},
+                     outputs={"variables": ["contact_area_ratio"]}, numerics={"points_per_decade": 20})
+    if key is not None:
+        raw["substrate"][key.partition(".")[2]] = value
+    return raw
+
+
+@pytest.mark.parametrize("key, value", SURFACE_CASES, ids=[f"{k}={v}" for k, v in SURFACE_CASES])
+def test_a_measured_surface_follows_its_options(key, value, tmp_path_factory):
+    """Every value of a measured surface's choice runs (or is refused in one line naming a key) through
+    to the contact stage; a value other than the default changes the contact key; the measured PSD
+    records the detrending, window and analysis it used (fill_undefined and extend are in the
+    result's ``parameters``: the map has no undefined points and the grid asks for no extension)."""
+    try:
+        res = _run(_topography(key, value), tmp_path_factory.mktemp(f"surface-{value}"))
+    except UserError as exc:
+        assert exc.key and "\n" not in str(exc), exc
+        return
+    if "topography" not in _DEFAULTS:
+        _DEFAULTS["topography"] = _run(_topography(), tmp_path_factory.mktemp("surface-default"))["contact"].attrs[
+            "stage_key"]
+    default = [p for ps in sections()["substrate"].variants.values() for p in ps if p.name == key.partition(".")[2]]
+    if value != default[0].default:
+        assert res["contact"].attrs["stage_key"] != _DEFAULTS["topography"]
+    name = key.partition(".")[2]
+    if name in {"detrend", "window", "analysis"}:
+        assert f'"{name}": "{value}"' in res["topography"]["psd_substrate_measured"].attrs["files"]
