@@ -98,7 +98,7 @@ class Figure:
     stages: tuple[str, ...]
     make: Callable[[Mapping[str, Mapping[str, xr.Dataset]]], Any]
     variants: tuple[str, ...] = ()
-    #: optional outputs the figure needs; it is skipped (with a note) when the scene does not ask for them
+    #: optional outputs the figure needs; it is not drawn (and not announced) when the scene does not ask for them
     outputs: tuple[str, ...] = ()
 
 
