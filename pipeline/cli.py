@@ -1,4 +1,4 @@
-"""Command line: ``roughcontact run|plan|show|plot|export|scenes``.
+"""Command line: ``roughcontact run|plan|show|plot|export|report|accuracy|scenes|reference``.
 
 Exit codes: 0 ok, 1 failure or (for ``plan``) something would run, 2 user error, 130 interrupted (Ctrl-C).
 """
@@ -102,6 +102,9 @@ def _parser() -> argparse.ArgumentParser:
     plot.add_argument("--scheduler", help="as for run")
     _export_parser(scene_command("export", "write the scene's results as tidy tables (CSV or Excel) for "
                                            "spreadsheets and FE codes (computing what is missing)"))
+    _report_parser(scene_command("report", "write one self-contained HTML page of the scene's results to send: "
+                                           "figures, key numbers with units, accuracy, provenance, warnings "
+                                           "(computing what is missing)"))
     scene_command("accuracy", "measure each stage's error and cost on a ladder of resolutions; NetCDF table + PNG")
     show = sub.add_parser("show", help="what is in a result file and where it came from")
     show.add_argument("file", type=Path)
@@ -198,6 +201,13 @@ def _scene_command(args, sc) -> int:
         return _plot(sc, outdir, reporter, args.scheduler)
     if args.command == "export":
         return _export(sc, outdir, reporter, args)
+    if args.command == "report":
+        from .report import write_report
+
+        page = write_report(sc, outdir, args.output, force=args.force, report=reporter, scheduler=args.scheduler,
+                            measure_accuracy=args.accuracy)
+        print(f"report in {page}")
+        return 0
     if args.command == "accuracy":
         from .accuracy import measure
 
@@ -208,23 +218,19 @@ def _scene_command(args, sc) -> int:
 
 
 def scene_figures(sc) -> tuple[list, list]:
-    """The figures ``plot`` draws for a scene, and those it skips because the scene does not ask
-    for an optional output they need."""
-    needed = {st.name for st in engine.needed_stages(sc, sc.outputs)}
-    figures = [f for st in stages().values() for f in st.figures if set(f.stages) <= needed]
-    asked = set(sc.outputs)
-    return [f for f in figures if set(f.outputs) <= asked], [f for f in figures if not set(f.outputs) <= asked]
+    """The figures ``plot`` draws for a scene, and those it skips (:func:`roughcontact.figures.scene_figures`)."""
+    from .figures import scene_figures as chosen
+
+    return chosen(sc)
 
 
 def _plot(sc, outdir: Path, reporter, scheduler=None) -> int:
     """Draw the scene's figures. A figure that needs an optional output the scene does not ask
     for, or that has nothing to show for this scene (a comparison without the variant it
     compares with), is not drawn and not announced as a problem: one closing line names them."""
-    import matplotlib
+    from .figures import use_agg
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = use_agg()
     figures, _ = scene_figures(sc)
     if not figures:
         raise UserError("none of the scene's stages draws a figure", key="outputs.variables")
@@ -253,6 +259,18 @@ def _export_parser(p) -> None:
     p.add_argument("--format", default="csv", help="csv (default) or xlsx (needs pandas and openpyxl)")
     p.add_argument("--variables", nargs="+", metavar="NAME", help="only these variables (default: all)")
     p.add_argument("--quiet", action="store_true", help="no progress bars: one line per stage and per table")
+    p.add_argument("--scheduler", help="as for run")
+
+
+def _report_parser(p) -> None:
+    p.add_argument("--output", type=Path, metavar="FILE", help="the page to write (default: <outdir>/report.html)")
+    p.add_argument("--force", action="append", default=[], metavar="STAGE",
+                   help="recompute STAGE even if fresh ('all': every stage, so that the page lists the warnings "
+                        "of every computation)")
+    p.add_argument("--accuracy", action="store_true",
+                   help="measure the accuracy of the settings first (as roughcontact accuracy does: seconds to "
+                        "minutes); without it the page shows a measurement already in <outdir>/accuracy")
+    p.add_argument("--quiet", action="store_true", help="no progress bars: one line per stage")
     p.add_argument("--scheduler", help="as for run")
 
 

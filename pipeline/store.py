@@ -251,6 +251,27 @@ def write_figure(fig, path: Path, dpi: int = 130) -> None:
                           file=str(path)) from None
 
 
+def write_file(data: bytes, path: Path, what: str = "file") -> None:
+    """Write ``data`` to ``path`` whole or not at all (a temporary beside it, then a rename); a
+    file that cannot be written is an :class:`OutputError` naming it (``what``: "report", ...)."""
+    path = Path(path)
+    tmp = path.with_name(f"{TMP_PREFIX}{path.name}.{_owner()}")
+    try:
+        with open(tmp, "wb") as fh:
+            fh.write(data)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.chmod(tmp, new_file_mode())
+        os.replace(tmp, path)
+    except OSError as exc:
+        tmp.unlink(missing_ok=True)
+        raise OutputError(f"cannot write this {what} ({exc.strerror or exc}); nothing of it was kept",
+                          file=str(path)) from None
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+
+
 def new_file_mode() -> int:
     """The permissions the user's umask gives a new file (0644 under umask 022)."""
     mask = os.umask(0o022)
