@@ -238,3 +238,18 @@ def test_chromium_loads_the_page_decodes_every_image_and_draws_it(reported, tmp_
         colours = im.convert("RGB").getcolors(maxcolors=1 << 16)
         assert im.size == (1200, 3000)
         assert colours is None or len(colours) > 50  # text, tables and figures: far from one colour
+
+
+@pytest.mark.slow
+def test_report_accuracy_measures_and_shows_the_error_of_the_preset_used(tmp_path, write_scene):
+    """(about 30 s: ``roughcontact accuracy`` runs each rung three times.)"""
+    scene = write_scene(make_scene(outputs={"variables": ["contact_area_ratio", "mean_separation"]}))
+    page, text = _report(tmp_path, scene, "--accuracy")
+    table = store.open_result(page.parent / "accuracy" / "accuracy.nc")
+    rows = {r[0]: r for t in Page(text).tables if t["section"] == "accuracy" and t["head"][0] == "stage"
+            for r in t["rows"][1:]}
+    for stage in ("contact", "separation"):
+        error = float(table["preset_error"].sel(stage=stage, preset="default"))
+        target = float(table["tolerance"].sel(stage=stage))
+        assert rows[stage][3] == number(error)
+        assert rows[stage][4] == ("meets it" if error <= target else "misses it")
