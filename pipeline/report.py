@@ -336,8 +336,9 @@ def _range(var: xr.DataArray | None, size: int | None) -> tuple[str, str, str]:
     if var is None:  # a dimension without a coordinate: its index
         return "0", _e(str((size or 1) - 1)), _e(str(size))
     count = _e(f"{var.size:,}")
-    if var.dtype.kind not in "fiu":
-        return "", "", count
+    if var.dtype.kind not in "fiu":  # labels (a coordinate of names): the first and the last
+        flat = np.asarray(var.values).ravel() if var.size <= RANGE_LIMIT else np.array([])
+        return (_e(flat[0]), _e(flat[-1]), count) if flat.size else ("", "", count)
     if var.size > RANGE_LIMIT:
         return '<span class="muted">not read</span>', "", count
     values = np.asarray(var.values, dtype=float)
