@@ -52,16 +52,19 @@ def _results(n, nb, shape=None):
     out = {"area": np.zeros(n), "mean_gap": np.zeros(n), "histogram": np.zeros((n, nb)), "overflow": np.zeros(n)}
     if shape is not None:
         out["gap"] = np.zeros((n,) + tuple(shape))
+        out["pressure"] = np.zeros((n,) + tuple(shape))
     return out
 
 
 def _flat_contact(pressures, stress_edges, nb, shape=None):
     """A flat composite (e.g. identical surfaces with eta = 1): full contact at any pressure,
-    the local pressure everywhere equal to p (a delta in the histogram); zero gap maps of
-    ``shape`` when asked for."""
+    the local pressure everywhere equal to p (a delta in the histogram); zero gap maps and
+    pressure maps equal to p of ``shape`` when asked for."""
     out = _results(pressures.size, nb, shape)
     out["area"][:] = 1.0
     for i, p in enumerate(pressures):
+        if shape is not None:
+            out["pressure"][i] = p
         if nb:
             edges = np.asarray(stress_edges[i])
             k = np.searchsorted(edges, p, side="right") - 1
@@ -98,7 +101,7 @@ def solve_contact(heights, pixel_size, E_star, pressures, *, tolerance=1e-10, st
     progress : callable, optional
         Called as ``progress(1)`` after each pressure is solved (for a progress bar).
     fields : bool
-        Also return the gap maps ``gap``, below.
+        Also return the gap and pressure maps ``gap`` and ``pressure``, below.
 
     Returns
     -------
@@ -108,7 +111,9 @@ def solve_contact(heights, pixel_size, E_star, pressures, *, tolerance=1e-10, st
         ``histogram`` (np, nb): density of the local pressure (1/Pa) over the whole map (sum of
         histogram * width = the map's fraction in contact inside the edges; no delta at 0, eq 16);
         ``overflow`` (np,): fraction of the map in contact above the last edge;
-        ``gap`` (np, nx, ny), with ``fields``: local gap (m), 0 where the pressure is > 0.
+        ``gap`` (np, nx, ny), with ``fields``: local gap (m), 0 where the pressure is > 0;
+        ``pressure`` (np, nx, ny), with ``fields``: local contact pressure (Pa), >= 0, its map
+        average the mean pressure p (force balance, to the solver's tolerance).
 
     Raises
     ------
@@ -164,11 +169,13 @@ def _pkr(tm, surface, tolerance):
 
 def _reduce(out, i, traction, gap, edges):
     """Store the solution at pressure index ``i``: contact fraction, mean gap (m), the
-    histogram of the local pressure (Pa) on ``edges`` and, if ``out`` has it, the gap map."""
+    histogram of the local pressure (Pa) on ``edges`` and, if ``out`` has them, the gap and
+    pressure maps."""
     npix = traction.size
     contact = traction > 0
     if "gap" in out:
         out["gap"][i] = np.where(contact, 0.0, np.maximum(gap, 0.0))
+        out["pressure"][i] = np.maximum(traction, 0.0)
     out["area"][i] = np.count_nonzero(contact) / npix
     out["mean_gap"][i] = max(float(gap.mean()), 0.0)
     if edges is not None and np.size(edges) > 1:

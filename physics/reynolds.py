@@ -59,6 +59,39 @@ def percolates(open_cells, axis):
     the winding number: the open region percolates along ``axis`` exactly when a cluster is
     reached twice with different windings.
     """
+    return bool(_winding_clusters(open_cells, axis, first=True)[1])
+
+
+def percolating_cells(open_cells, axis):
+    """The open cells of the clusters that wrap around the periodic map along ``axis``: the
+    channels through which a fluid can cross the map (the rest of the open area is pools).
+
+    Parameters
+    ----------
+    open_cells : bool array (nx, ny)
+        Open (non-contact) cells of a periodic map.
+    axis : int
+        0: paths along the first index, 1: along the second.
+
+    Returns
+    -------
+    bool array (nx, ny)
+        True on every cell of a cluster that percolates along ``axis`` (:func:`percolates` is
+        whether any cell is True); a cluster is the set of open cells joined through open
+        neighbours (4-connected, periodic).
+
+    References
+    ----------
+    Dapp, Luecke, Persson & Mueser, Phys. Rev. Lett. 108, 244301 (2012); docs/interface.md.
+    """
+    label, found = _winding_clusters(open_cells, axis)
+    return np.isin(label, list(found)) & np.asarray(open_cells, dtype=bool)
+
+
+def _winding_clusters(open_cells, axis, first=False):
+    """(labels of the clusters of the map cut along ``axis``, the labels of those that belong to
+    a cluster of the whole torus that wraps around along ``axis``); with ``first``, stop at the
+    first such cluster found."""
     from scipy.sparse.csgraph import connected_components
 
     open_cells = np.asarray(open_cells, dtype=bool)
@@ -78,20 +111,26 @@ def percolates(open_cells, axis):
     for a, b in zip(top.tolist(), bottom.tolist(), strict=True):
         links.setdefault(a, []).append((b, 1))
         links.setdefault(b, []).append((a, -1))
+    found: set[int] = set()
     for start in links:
         if start in winding:
             continue
         winding[start] = 0
-        todo = [start]
+        todo, members, wraps = [start], [start], False
         while todo:
             a = todo.pop()
             for b, step in links[a]:
                 if b not in winding:
                     winding[b] = winding[a] + step
                     todo.append(b)
+                    members.append(b)
                 elif winding[b] != winding[a] + step:
-                    return True
-    return False
+                    wraps = True
+                    if first:
+                        return label, {start}
+        if wraps:
+            found.update(members)
+    return label, found
 
 
 def flow_factors(gap, axes=(0, 1)):

@@ -62,7 +62,7 @@ class Estimate:
     def keys(self, per_block: bool = False) -> list[str]:
         """The scene keys of the dimensions longer than 1 (per block of the computation), longest first."""
         order = sorted(self.dims.values(), key=lambda v: -(v[2] if per_block else v[0]))
-        return [key for size, key, block in order if key and (block if per_block else size) > 1]
+        return list(dict.fromkeys(key for size, key, block in order if key and (block if per_block else size) > 1))
 
     def memory_keys(self) -> list[str]:
         """The scene keys to reduce when one block does not fit in memory."""

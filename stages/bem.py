@@ -35,6 +35,8 @@ from roughcontact.stage import (
 )
 
 from .figures.bem import figure_bem_comparison, figure_bem_reduced_pressure
+from .figures.bem_fields import field_figures
+from .shared.bem_fields import FIELD_KEYS, MAPS as FIELD_MAPS, PARAMS as FIELD_PARAMS, Fields, with_fields
 from .shared.maps import check_eta, map_band, map_surfaces, measured_maps, topography_files
 from .shared.material import E_STAR, MATERIAL_KEYS, e_star
 from .shared.surfaces import MAP_KEYS, surface_reads
@@ -69,6 +71,7 @@ register_params(
           doc="relative tolerance of the BEM contact solver"),
     Param("bem_stress_bins", "int", default=50, lo=2, doc="bins of the BEM contact-pressure histogram"),
 )
+register_params("bem", *FIELD_PARAMS)  # the maps stored as optional outputs (stages/shared/bem_fields.py)
 
 
 def _missing(exc: SolverMissing) -> UserError:
@@ -158,16 +161,17 @@ def _bem_shape(inp: StageInput, maps, points: int) -> Shape:
     keys = {"realization": "bem.realizations", "pixels": "bem.grid" if maps is None else "bem.surfaces"}
     values_per_pixel = 25
     if inp.stage == "interface_bem":
-        values_per_pixel += 6 * np.size(inp["load.p"])
+        values_per_pixel += 9 * np.size(inp["load.p"])  # gap and pressure maps at p, p exp(+-step); gaps sorted
         return Shape(sizes={"realization": realizations}, coupled=("p", "eta"), keys=keys,
                      work={"values_per_pixel": values_per_pixel, "pixels": n * n, "per_point": 1 / max(points, 1)})
     sizes = {"realization": realizations, "bem_stress_level": int(inp["numerics.bem_stress_bins"]),
              "theory": len(VARIANTS)}
     lacks = {name: tuple(d for d in _DIMS_ALL if d not in spans) for name, spans in _SPANS.items()}
     lacks.update({name: ("zeta", "realization", "bem_stress_level", "theory") for name in _SPAN_P_ETA})
-    return Shape(sizes=sizes, lacks=lacks, coupled=("p", "eta", "zeta"),
-                 keys={**keys, "bem_stress_level": "numerics.bem_stress_bins"},
-                 work={"values_per_pixel": values_per_pixel, "pixels": n * n, "per_point": 1 / max(points, 1)})
+    return with_fields(inp, Shape(sizes=sizes, lacks=lacks, coupled=("p", "eta", "zeta"),
+                                  keys={**keys, "bem_stress_level": "numerics.bem_stress_bins"},
+                                  work={"values_per_pixel": values_per_pixel, "pixels": n * n,
+                                        "per_point": 1 / max(points, 1)}))
 
 
 #: the outputs over (p, eta) alone
@@ -243,9 +247,10 @@ def map_pairs(band: dict, q, C1, C2, eta_values):
             yield (j, r) + synthesize_pair(q, C1, C2, eta, band["n"], band["q_cut"], noise=noise)
 
 
-def _solve_all(inp, band, q, C1, C2, E_star, p_values, eta_values, edges) -> dict:
+def _solve_all(inp, band, q, C1, C2, E_star, p_values, eta_values, edges, fields=None) -> dict:
     """Every map pair solved at every pressure: area, gap, histogram and overflow over
-    (p, eta, realization), and the composite's rms height and slope over (eta, realization)."""
+    (p, eta, realization), and the composite's rms height and slope over (eta, realization);
+    ``fields`` (:class:`Fields`) keeps the maps of the realization it wants."""
     R, dx = band["R"], band["dx"]
     shape = (p_values.size, eta_values.size, R)
     out = {k: np.empty(shape) for k in ("area", "mean_gap", "overflow")}
@@ -257,10 +262,13 @@ def _solve_all(inp, band, q, C1, C2, E_star, p_values, eta_values, edges) -> dic
     for j, r, h1, h2 in map_pairs(band, q, C1, C2, eta_values):
         out["hrms"][j, r] = float(np.std(h1 - h2))
         out["slope"][j, r] = rms_slope_of_map(h1 - h2, dx)
+        keep = fields is not None and fields.wants(r)
         res = solve_pair(h1, h2, dx, E_star, p_values[order], tolerance=inp["numerics.bem_tolerance"],
-                         stress_edges=edges[order, j], progress=tick)
+                         stress_edges=edges[order, j], progress=tick, fields=keep)
         for k in ("area", "mean_gap", "histogram", "overflow"):
             out[k][order, j, r] = res[k]
+        if keep:
+            fields.keep_solved(j, res, order)
     return out
 
 
@@ -324,7 +332,8 @@ def compute_bem(inp: StageInput) -> xr.Dataset:
     top = p_values[:, None] + inp["numerics.sigma_width"] * np.sqrt(np.maximum(G_pe, 0.0))[None, :]
     top = np.where(top > p_values[:, None], top, 2.0 * p_values[:, None])
     edges = np.linspace(0.0, 1.0, nb + 1) * top[..., None]  # (p, eta, nb + 1)
-    res = _solve_all(inp, band, q, C1, C2, E_star, p_values, eta_values, edges)
+    fields = Fields(inp, band, eta_values.size)
+    res = _solve_all(inp, band, q, C1, C2, E_star, p_values, eta_values, edges, fields)
 
     R, dims = band["R"], ("p", "eta", "realization")
     ds = xr.Dataset(coords={"p": p_values, "eta": eta_values, "realization": np.arange(R), "bem_stress_level": level})
@@ -348,6 +357,7 @@ def compute_bem(inp: StageInput) -> xr.Dataset:
         ds["area_ratio_theory_to_bem"] = (("p", "eta"), t_area / ds["bem_contact_area_ratio_mean"].values)
         ds["separation_ratio_theory_to_bem"] = (("p", "eta"), t_gap / ds["bem_mean_gap_mean"].values)
     ds = _with_variants(inp, ds, psd, q, zeta_bem, p_values, has_eta, E_star)
+    ds = fields.add_to(ds, p_values)
     for k, v in attrs.items():
         ds[k] = xr.DataArray(v)
     ds["E_star"] = xr.DataArray(E_star)
@@ -403,7 +413,8 @@ register(
         # Synthesized surfaces come from the psd stage's spectra: of those sections, only the kind
         reads=(*MATERIAL_KEYS, "load.p", "interface.eta", *surface_reads({"topography": MAP_KEYS, "*": ()}),
                "bem.surfaces", "bem.grid", "bem.realizations", "bem.seed", "bem.pixels_per_wavelength",
-               "numerics.bem_tolerance", "numerics.bem_stress_bins", "numerics.sigma_width", *VARIANT_KEYS),
+               "numerics.bem_tolerance", "numerics.bem_stress_bins", "numerics.sigma_width", *VARIANT_KEYS,
+               *FIELD_KEYS),
         files=(topography_files("substrate"), topography_files("solid")),
         outputs={
             "bem_contact_area_ratio": Var("1", "relative contact area A/A0, BEM",
@@ -451,6 +462,7 @@ register(
             **{k: Var(_BAND_UNITS[k], label, attrs={"comment": comment} if comment else {})
                for k, (label, comment) in _BAND_NAMES.items()},
             "E_star": E_STAR,
+            **FIELD_MAPS["bem"],
         },
         coords={
             "realization": REALIZATION,
@@ -463,7 +475,8 @@ register(
         figures=(Figure("bem_comparison", "theory vs BEM: A/A0, mean separation and their ratios",
                         ("bem",), figure_bem_comparison),
                  Figure("bem_reduced_pressure", "theory / BEM ratios of every variant against p/(E* g)",
-                        ("bem",), figure_bem_reduced_pressure)),
+                        ("bem",), figure_bem_reduced_pressure),
+                 *field_figures("bem")),
         doc="Exact FFT-BEM contact (tamaas) on synthesized or measured surface pairs, compared with the theory at "
             "the same band.",
     )

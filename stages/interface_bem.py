@@ -23,9 +23,11 @@ from roughcontact.physics.reynolds import flow_factors, percolates
 from roughcontact.stage import Figure, Param, Stage, StageInput, Var, register, register_params
 
 from .bem import REALIZATION, bem_band, bem_eta_values, check_bem, describe_bem, map_pairs, single_surfaces, solve_pair
+from .figures.bem_fields import field_figures
 from .figures.interface_bem import figure_interface_bem
 from .leakage import NUMERICS as LEAKAGE_NUMERICS, SEAL_KEYS, leakage_settings, leakage_theory_attrs, seal_parameters
 from .separation import check_separation
+from .shared.bem_fields import FIELD_KEYS, MAPS as FIELD_MAPS, Fields, with_fields
 from .shared.maps import check_eta, map_surfaces, topography_files
 from .shared.material import E_STAR, MATERIAL_KEYS, e_star
 from .stiffness import SEPARATION_KEYS, separation_settings
@@ -39,7 +41,7 @@ register_params(
 )
 
 BEM_KEYS = ("interface.eta", "substrate", "solid", "bem.surfaces", "bem.grid", "bem.realizations", "bem.seed",
-            "bem.pixels_per_wavelength", "numerics.bem_tolerance")
+            "bem.pixels_per_wavelength", "numerics.bem_tolerance", *FIELD_KEYS)
 
 
 def _solver(inp, E_star, dx, tick):
@@ -85,9 +87,10 @@ def sealing_bisection(solve, h1, h2, known, axis, steps, p_max):
     return float(np.sqrt(lo * hi)), area
 
 
-def _solve_exact(inp, band, q, C1, C2, E_star, p_values, eta_values) -> dict:
+def _solve_exact(inp, band, q, C1, C2, E_star, p_values, eta_values, fields=None) -> dict:
     """Per (p, eta, realization): area, mean gap, exact stiffness and flow factor; per (eta,
-    realization): the sealing pressure (where neither axis percolates any more) and the area there."""
+    realization): the sealing pressure (where neither axis percolates any more) and the area there;
+    ``fields`` (:class:`Fields`) keeps the maps at p of the realization it wants."""
     step = float(inp["numerics.interface_bem_step"])
     shape = (p_values.size, eta_values.size, band["R"])
     out = {k: np.empty(shape) for k in ("area", "gap", "stiffness", "flow")}
@@ -110,6 +113,8 @@ def _solve_exact(inp, band, q, C1, C2, E_star, p_values, eta_values) -> dict:
                                                  / np.where(u_minus > u_plus, u_minus - u_plus, 1.0), np.inf)
         out["area"][:, j, r], out["gap"][:, j, r] = at["area"][n:2 * n], u
         out["flow"][:, j, r] = [float(np.mean(flow_factors(g))) for g in at["gap"][n:2 * n]]
+        if fields is not None and fields.wants(r):
+            fields.keep(j, at["pressure"][n:2 * n], at["gap"][n:2 * n])
         known = list(zip(pressures, at["gap"], at["area"], strict=True))
         seals = [sealing_bisection(solve, h1, h2, known, axis, inp["numerics.interface_bem_bisections"],
                                    10.0 * E_star) for axis in (0, 1)]
@@ -145,6 +150,11 @@ def check_interface_bem(inp: StageInput) -> None:
     check_separation(inp)
 
 
+def describe_interface_bem(inp: StageInput):
+    """The BEM's shape (:func:`describe_bem`), with the maps' dimensions when a map is asked for."""
+    return with_fields(inp, describe_bem(inp), others=STAGE.outputs)
+
+
 def compute_interface_bem(inp: StageInput) -> xr.Dataset:
     psd = inp.upstream["psd"]
     q = psd["q"].values
@@ -155,7 +165,8 @@ def compute_interface_bem(inp: StageInput) -> xr.Dataset:
     band = bem_band(inp, q, names)
     p_values = np.atleast_1d(np.asarray(inp["load.p"], dtype=float))
     eta_values = bem_eta_values(inp, psd, names, C1, C2)
-    exact = _solve_exact(inp, band, q, C1, C2, E_star, p_values, eta_values)
+    fields = Fields(inp, band, eta_values.size)
+    exact = _solve_exact(inp, band, q, C1, C2, E_star, p_values, eta_values, fields)
     theory = _theory(inp, psd, band, p_values, eta_values, E_star)
     pe, per, er = ("p", "eta"), ("p", "eta", "realization"), ("eta", "realization")
     ds = xr.Dataset(coords={"p": p_values, "eta": eta_values, "realization": np.arange(band["R"])})
@@ -177,6 +188,7 @@ def compute_interface_bem(inp: StageInput) -> xr.Dataset:
     with np.errstate(divide="ignore", invalid="ignore"):
         ds["stiffness_ratio_theory_to_exact"] = (pe, theory["stiffness"] / ds["exact_stiffness_mean"].values)
     ds["E_star"] = xr.DataArray(E_star)
+    ds = fields.add_to(ds, p_values)
     ds.attrs.update({"bem_zeta": band["zeta"], "bem_q_cut": band["q_cut"], "bem_grid": band["n"],
                      "bem_pixel_size": band["dx"], "bem_surfaces": "measured" if band["maps"] is not None else
                      "synthesized", "bem_band_limit": band["limit"], "leakage_aspect_ratio": seal_parameters(inp)[2]
@@ -189,13 +201,13 @@ def compute_interface_bem(inp: StageInput) -> xr.Dataset:
 _ZERO = ("NaN where both leak rates are 0; +inf where only the exact one is (the theory still leaks, the BEM map "
          "is closed)")
 _NAN = "NaN where the bracket is not found: closed at every load asked for, or open up to 10 E*"
-register(
+STAGE = register(
     Stage(
         name="interface_bem",
         version="2",
         compute=compute_interface_bem,
         check=check_interface_bem,
-        describe=describe_bem,
+        describe=describe_interface_bem,
         needs=("psd",),
         reads=(*MATERIAL_KEYS, "load.p", *BEM_KEYS, *SEPARATION_KEYS, *SEAL_KEYS, "leakage.percolation_area",
                 *LEAKAGE_NUMERICS, "numerics.interface_bem_step", "numerics.interface_bem_bisections"),
@@ -231,10 +243,11 @@ register(
             "stiffness_ratio_theory_to_exact": Var("1", "theory / BEM contact stiffness",
                                                    attrs={"nan_reason": "NaN where both are +inf (full contact)"}),
             "E_star": E_STAR,
+            **FIELD_MAPS["interface_bem"],
         },
         coords={"realization": REALIZATION},
         figures=(Figure("interface_bem", "theory vs exact: leak rate and contact stiffness on the BEM's gap",
-                        ("interface_bem",), figure_interface_bem),),
+                        ("interface_bem",), figure_interface_bem), *field_figures("interface_bem")),
         doc="Exact check on the BEM gap maps: Reynolds leak rate, sealing load and stiffness against the theory.",
     )
 )
