@@ -103,13 +103,17 @@ def figure_gap_maps(results, stage: str = "bem"):
         return None
     da, label, loads = _selected(ds, name)
     extent, unit = _extent(da)
-    columns = len(loads)
-    fig, axes = plt.subplots(1, columns, figsize=(4.6 * columns + 1.2, 5.2), layout="constrained", squeeze=False)
+    columns = min(2, len(loads))
+    rows = -(-len(loads) // columns)
+    fig, axes = plt.subplots(rows, columns, figsize=(4.8 * columns + 1.4, 4.6 * rows + 0.4), layout="constrained",
+                             squeeze=False)
+    for ax in axes.ravel()[len(loads):]:
+        ax.set_visible(False)
     top = float(np.nanmax(da.isel(bem_field_p=loads).values)) or 1.0
     scale, gunit = _length_unit(top)
     classes = ListedColormap(["black", "0.72"])  # contact, trapped pools
     water = ListedColormap(plt.get_cmap("YlGnBu")(np.linspace(0.0, 0.8, 256)))  # no dark blue next to the black
-    for ax, i in zip(axes[0], loads, strict=True):
+    for ax, i in zip(axes.ravel(), loads, strict=False):
         gap = da.isel(bem_field_p=i).values
         p = float(da["bem_field_p"].values[i])
         open_cells = gap > 0
@@ -125,9 +129,9 @@ def figure_gap_maps(results, stage: str = "bem"):
                      + (f"open along {way}" if along else "sealed"), fontsize=9)
         ax.set_xlabel(f"y ({unit})")
         ax.set_ylabel(f"x ({unit})")
-    fig.colorbar(image, ax=axes[0, -1], label=f"gap in the percolating channel ({gunit})", shrink=0.85)
-    fig.suptitle(_title(ds, stage, "gap (colour: percolating channel, grey: trapped pools, black: contact)",
-                        label), fontsize=10)
+    fig.colorbar(image, ax=axes, label=f"gap in the percolating channel ({gunit})", shrink=0.6)
+    fig.suptitle(_title(ds, stage, "gap", label) + "\ncolour: the percolating channel (the fluid's way across), "
+                 "grey: trapped pools, black: contact", fontsize=10)
     return fig
 
 
