@@ -45,27 +45,17 @@ def _store():
     return store
 
 
-def _stage():
-    from . import stage
-
-    return stage
-
-
 def _units():
     from . import units
 
     return units
 
 
-engine, scenes, store, _stages, _unit_text = (_OnUse(f) for f in (_engine, _scene, _store, _stage, _units))
+engine, scenes, store, _unit_text = (_OnUse(f) for f in (_engine, _scene, _store, _units))
 
 
 def units_of(key):
     return scenes.units_of(key)
-
-
-def stages():
-    return _stages.stages()
 
 
 def display(value, units):
