@@ -135,7 +135,7 @@ def _pair_cost(xa, ya, xb, yb, d, vertical, samples=40):
     return float(np.mean([np.mean((r - off) ** 2) for r in diffs])), off, hi - lo
 
 
-def pair_shift(xa, ya, xb, yb, vertical=False, min_overlap=0.5, step=0.02, flat_width=0.25):
+def pair_shift(xa, ya, xb, yb, vertical=False, min_overlap=0.5, step=0.02, flat_width=0.25, direction=0):
     """The horizontal shift d (decades) that lays sweep b, at x = log10 omega + d, on its neighbour a.
 
     d minimises the area between the two curves in log-log over their overlap divided by the
@@ -144,7 +144,12 @@ def pair_shift(xa, ya, xb, yb, vertical=False, min_overlap=0.5, step=0.02, flat_
     overlap of at least ``min_overlap`` decades (or the whole narrower sweep, if shorter): a scan in
     steps of ``step`` decades, refined by a bounded scalar minimisation around the best step.
     Requiring an overlap keeps the shift from sliding to the edge of the data where two flat or
-    noisy curves meet by chance.
+    noisy curves meet by chance. With ``direction`` the shift keeps the sign that the temperature
+    order demands: every relaxation time shortens on heating (a_T decreases with T, as WLF and
+    Arrhenius do; Ferry (1980), ch. 11), so a warmer sweep laid on a colder one has d <= 0
+    (``direction = -1``) and a colder one d >= 0 (``+1``); where the overlap wants the other sign
+    (a flat curve, or a vertical change the shift should not absorb) the shift stays at 0 and is
+    flagged ``at_edge``.
 
     Parameters
     ----------
@@ -159,6 +164,8 @@ def pair_shift(xa, ya, xb, yb, vertical=False, min_overlap=0.5, step=0.02, flat_
     flat_width : float
         Half-width (decades) of the range of shifts over which the cost may stay within four times its
         least value (plus 1e-6) before the shift counts as not determined (flat curves).
+    direction : int
+        Sign the shift must have: +1 (d >= 0, sweep b colder than a), -1 (d <= 0, b warmer) or 0 (any).
 
     Returns
     -------
@@ -166,7 +173,8 @@ def pair_shift(xa, ya, xb, yb, vertical=False, min_overlap=0.5, step=0.02, flat_
         ``shift`` (decades), ``offset`` (log10 b of b relative to a; 0 without ``vertical``),
         ``overlap`` (decades), ``misfit`` (rms distance of the curves there, decades) and ``at_edge``
         (the shift is not determined by the overlap: the best shift is the smallest overlap allowed,
-        i.e. the data want less overlap than that, or the cost is flat over more than 2 flat_width).
+        i.e. the data want less overlap than that, or it is 0 because the data want the sign that
+        ``direction`` excludes, or the cost is flat over more than 2 flat_width).
 
     References
     ----------
@@ -176,6 +184,10 @@ def pair_shift(xa, ya, xb, yb, vertical=False, min_overlap=0.5, step=0.02, flat_
 
     need = min(min_overlap, xa[-1] - xa[0], xb[-1] - xb[0])
     lo, hi = xa[0] - xb[-1] + need, xa[-1] - xb[0] - need
+    if direction > 0:
+        lo = min(max(lo, 0.0), hi)
+    elif direction < 0:
+        hi = max(min(hi, 0.0), lo)
     trials = np.arange(lo, hi + 0.5 * step, step) if hi > lo else np.array([0.5 * (lo + hi)])
     costs = np.array([_pair_cost(xa, ya, xb, yb, d, vertical)[0] for d in trials])
     k = int(np.argmin(costs))
@@ -199,7 +211,8 @@ def pair_shift(xa, ya, xb, yb, vertical=False, min_overlap=0.5, step=0.02, flat_
 def overlap_shifts(logw, l1, l2, sweep, n_T, j0, quantity="moduli", vertical=False, min_overlap=0.5):
     """log10 a_j, log10 b_j of every sweep from the overlap of neighbours, chained from the sweep j0
     (the one at or nearest T_ref, a = b = 1) outwards: each warmer sweep is laid on its colder
-    neighbour, each colder sweep on its warmer one (:func:`pair_shift`), and the shifts add up.
+    neighbour, each colder sweep on its warmer one (:func:`pair_shift`, with the sign the temperature
+    order demands: log10 a_j does not increase with T), and the shifts add up.
 
     Parameters
     ----------
@@ -234,7 +247,7 @@ def overlap_shifts(logw, l1, l2, sweep, n_T, j0, quantity="moduli", vertical=Fal
     for j, ref in [(j, j - 1) for j in range(j0 + 1, n_T)] + [(j, j + 1) for j in range(j0 - 1, -1, -1)]:
         a, b = sweep == ref, sweep == j
         pair = pair_shift(logw[a], tuple(c[a] for c in curves), logw[b], tuple(c[b] for c in curves),
-                          vertical and quantity != "tan_delta", min_overlap)
+                          vertical and quantity != "tan_delta", min_overlap, direction=1 if j < ref else -1)
         off = pair.offset
         if vertical and quantity == "tan_delta":
             off = _pair_cost(logw[a], (l1[a], l2[a]), logw[b], (l1[b], l2[b]), pair.shift, True)[1]

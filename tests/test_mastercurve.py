@@ -284,6 +284,26 @@ def test_a_flat_storage_modulus_does_not_fix_a_shift_and_says_so():
     assert fit.at_edge[:3].any()
 
 
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_overlap_shifts_never_run_against_the_temperature_order(seed):
+    """Relaxation times shorten on heating, so log10 a_T does not increase with T, even where a flat E'
+    (glassy plateau, 1 % noise) lets the overlap of two sweeps prefer the wrong sign."""
+    T, sweep, w, Ep, Epp = glassy_sweeps(seed)
+    fit = mc.build_master_curve(T, sweep, w, Ep, Epp, T_REF, quantity="storage")
+    assert np.all(np.diff(fit.log10_aT) <= 0.0)
+
+
+def test_a_pair_that_wants_the_wrong_sign_stays_unshifted_and_is_flagged():
+    """Sweep b is sweep a moved 0.3 decades up in frequency: laid on a as a colder sweep (shift >= 0) it
+    comes back at +0.3; as a warmer one (shift <= 0) it stays at 0 and is flagged."""
+    x = np.linspace(0.0, 3.0, 31)
+    curve = lambda x: np.tanh(x - 1.5)  # noqa: E731
+    free = mc.pair_shift(x, (curve(x),), x, (curve(x + 0.3),), direction=+1)
+    assert free.shift == pytest.approx(0.3, abs=0.01) and not free.at_edge
+    held = mc.pair_shift(x, (curve(x),), x, (curve(x + 0.3),), direction=-1)
+    assert held.shift == pytest.approx(0.0, abs=1e-9) and held.at_edge
+
+
 def test_binned_long_sweeps_give_the_shifts_of_the_short_ones():
     """A sweep logged at 2000 points is averaged in bins (20 per decade): the fit sees ~60 points a
     sweep and gives the shifts of the 13-point sweeps."""

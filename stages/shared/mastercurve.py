@@ -224,7 +224,8 @@ def _warn_overlap(spec, data, overlap, at_edge, T) -> None:
         return
     listed = "; ".join(f"{T[j] - 273.15:.4g} °C on {T[k] - 273.15:.4g} °C" for j, k in pairs)
     message = (f"the overlap of these neighbouring sweeps does not fix their shift on {spec['shift_on']} (the best "
-               f"shift wants less than {spec['min_overlap']:g} decades of overlap, or the curves are flat there): "
+               f"shift wants less than {spec['min_overlap']:g} decades of overlap, or a sign against the temperature "
+               f"order, or the curves are flat there): "
                f"{listed}. Measure closer temperatures or wider frequency ranges, or shift on another quantity "
                "(shift_on: a flat E' on a glassy or rubbery plateau does not fix a shift; E'' or tan delta may)")
     if spec["no_overlap"] == "error":
