@@ -1,7 +1,8 @@
 """The ``dma`` source of the ``modulus`` stage: multi-temperature DMA frequency sweeps (read in SI by
 the engine's ``dma`` reader) shifted onto a master curve, the WLF law fitted to the shifts, a
 causal (Prony) master curve and the Kramers-Kronig check. Kernels:
-:mod:`roughcontact.physics.mastercurve`; docs/theory.md, section "Master curves from DMA data".
+:mod:`roughcontact.physics.mastercurve` and :mod:`roughcontact.physics.relaxation_spectrum`; docs/theory.md,
+section "Master curves from DMA data".
 
 Not a stage of its own: :mod:`roughcontact.stages.modulus` declares the keys and outputs.
 """
@@ -20,11 +21,9 @@ from roughcontact.physics.mastercurve import (
     SHIFT_QUANTITIES,
     bin_sweeps,
     build_master_curve,
-    fit_prony,
-    kramers_kronig_deviation,
     overlap_shifts,
-    relaxation_times,
 )
+from roughcontact.physics.relaxation_spectrum import fit_prony, kramers_kronig_deviation, relaxation_times
 from roughcontact.physics.viscoelastic import loss_modulus_from_tan_delta, prony_modulus
 from roughcontact.stage import Param, UserError, Var
 

@@ -22,7 +22,7 @@ their overlap; `misfit`, decades): shifts that superpose the data better give a 
 
 Prony part: on one master curve per set (the same shifted points for every method: A our E' shifts,
 B the instrument's shifts and, apart, ours, S and S' the true shifts) it fits the relaxation spectrum our way
-(physics/mastercurve.py fit_prony: relaxation_times at n per decade, non-negative least squares on
+(physics/relaxation_spectrum.py fit_prony: relaxation_times at n per decade, non-negative least squares on
 relative residuals of E' and E'') and pyvisco's ways (prony.discretize "round" + prony.fit, the default
 of its dashboard: one term per decade collocated at interpolated points; with opt=True: L-BFGS-B on
 every point; opt.nprony: fewest terms within 1.5 times the least residual), and prints the rms log10
@@ -43,7 +43,7 @@ import warnings
 import numpy as np
 from _bench import SMOKE, TESTS
 
-from roughcontact.physics import mastercurve as mc, viscoelastic as ve
+from roughcontact.physics import mastercurve as mc, relaxation_spectrum as rs, viscoelastic as ve
 from roughcontact.readers import READERS
 
 DATA = TESTS / "data" / "pyvisco"
@@ -103,8 +103,8 @@ def log_rms(Ep, Epp, model):
 def prony_ours(w, Ep, Epp, per_decade):
     """Our spectrum fit: (E', E'') at w, terms used, terms offered, seconds."""
     start = time.perf_counter()
-    times = mc.relaxation_times(w, per_decade)
-    E0, moduli, _ = mc.fit_prony(w, Ep, Epp, times)
+    times = rs.relaxation_times(w, per_decade)
+    E0, moduli, _ = rs.fit_prony(w, Ep, Epp, times)
     seconds = time.perf_counter() - start
     return ve.prony_modulus(w, E0, moduli, times), int(np.count_nonzero(moduli)), times.size, seconds
 
