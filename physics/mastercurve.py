@@ -1,5 +1,5 @@
 """Master curves from multi-temperature DMA frequency sweeps: horizontal (and optional vertical)
-time-temperature shifts, the WLF fit, a relaxation spectrum and the Kramers-Kronig check.
+time-temperature shifts and the law fitted to them (WLF, or WLF-Arrhenius).
 
 Time-temperature superposition: the sweep at temperature T_j, shifted to reduced frequency
 omega a_j and divided by b_j, lies on one curve E(omega, T_ref):
@@ -7,16 +7,15 @@ omega a_j and divided by b_j, lies on one curve E(omega, T_ref):
 .. math:: E(\\omega, T_j) = b_j\\,E(\\omega a_j, T_\\mathrm{ref}), \\qquad
           \\log_{10}a_T = -\\frac{C_1 (T - T_\\mathrm{ref})}{C_2 + T - T_\\mathrm{ref}}.
 
-The shifts are found by least squares on the log moduli: every sweep's log10 E' and log10 E''
-against the one smooth curve (a cubic B-spline in log10 of the reduced frequency, refitted for
-every trial shift) through all shifted data. ``free`` shifts fit log10 a_j per sweep (started
-from pairwise overlaps of neighbouring sweeps) and then C1, C2 to them; ``wlf`` fits C1, C2 to
-the data directly. The master curve at T_ref is then a generalized Maxwell (Prony) spectrum fitted
-with non-negative moduli (causal by construction), and causality of the data is checked by
-Kramers-Kronig: E' rebuilt from a spectrum fitted to E'' alone (plus the one constant E'' does
-not fix, the relaxed modulus) must match the measured E'. See docs/theory.md, section "Master
-curves from DMA data"; Ferry, Viscoelastic Properties of Polymers, 3rd ed. (1980), ch. 11;
-Tschoegl (1989), ch. 3-4.
+``overlap`` shifts lay each sweep on its neighbour by the overlap of the two curves (Gergesova et
+al., Rheol. Acta 50, 519 (2011)), chained from T_ref outwards, with the sign the temperature order
+demands. ``free`` and ``wlf`` fit by least squares on the log moduli: every sweep's log10 E' and
+log10 E'' against the one smooth curve (a cubic B-spline in log10 of the reduced frequency, refitted
+for every trial shift) through all shifted data; ``free`` fits log10 a_j per sweep (started from the
+overlap shifts) and then C1, C2 to them; ``wlf`` fits C1, C2 to the data directly. The relaxation
+spectrum of the shifted master curve and the Kramers-Kronig check are in
+:mod:`roughcontact.physics.relaxation_spectrum`. See docs/theory.md, section "Master curves from DMA
+data"; Ferry, Viscoelastic Properties of Polymers, 3rd ed. (1980), ch. 11.
 
 scipy.optimize and scipy.interpolate are imported inside the functions that fit (loading the stage
 declarations, as a rerun with nothing to compute does, does not import them).
@@ -28,7 +27,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .viscoelastic import GAS_CONSTANT, prony_modulus, wlf_arrhenius_log10_shift, wlf_log10_shift
+from .viscoelastic import GAS_CONSTANT, wlf_arrhenius_log10_shift, wlf_log10_shift
 
 
 class Shifts(NamedTuple):
@@ -135,7 +134,7 @@ def _pair_cost(xa, ya, xb, yb, d, vertical, samples=40):
     return float(np.mean([np.mean((r - off) ** 2) for r in diffs])), off, hi - lo
 
 
-def pair_shift(xa, ya, xb, yb, vertical=False, min_overlap=0.5, step=0.02, flat_width=0.25):
+def pair_shift(xa, ya, xb, yb, vertical=False, min_overlap=0.5, step=0.02, flat_width=0.25, direction=0):
     """The horizontal shift d (decades) that lays sweep b, at x = log10 omega + d, on its neighbour a.
 
     d minimises the area between the two curves in log-log over their overlap divided by the
@@ -144,7 +143,12 @@ def pair_shift(xa, ya, xb, yb, vertical=False, min_overlap=0.5, step=0.02, flat_
     overlap of at least ``min_overlap`` decades (or the whole narrower sweep, if shorter): a scan in
     steps of ``step`` decades, refined by a bounded scalar minimisation around the best step.
     Requiring an overlap keeps the shift from sliding to the edge of the data where two flat or
-    noisy curves meet by chance.
+    noisy curves meet by chance. With ``direction`` the shift keeps the sign that the temperature
+    order demands: every relaxation time shortens on heating (a_T decreases with T, as WLF and
+    Arrhenius do; Ferry (1980), ch. 11), so a warmer sweep laid on a colder one has d <= 0
+    (``direction = -1``) and a colder one d >= 0 (``+1``); where the overlap wants the other sign
+    (a flat curve, or a vertical change the shift should not absorb) the shift stays at 0 and is
+    flagged ``at_edge``.
 
     Parameters
     ----------
@@ -159,6 +163,8 @@ def pair_shift(xa, ya, xb, yb, vertical=False, min_overlap=0.5, step=0.02, flat_
     flat_width : float
         Half-width (decades) of the range of shifts over which the cost may stay within four times its
         least value (plus 1e-6) before the shift counts as not determined (flat curves).
+    direction : int
+        Sign the shift must have: +1 (d >= 0, sweep b colder than a), -1 (d <= 0, b warmer) or 0 (any).
 
     Returns
     -------
@@ -166,7 +172,8 @@ def pair_shift(xa, ya, xb, yb, vertical=False, min_overlap=0.5, step=0.02, flat_
         ``shift`` (decades), ``offset`` (log10 b of b relative to a; 0 without ``vertical``),
         ``overlap`` (decades), ``misfit`` (rms distance of the curves there, decades) and ``at_edge``
         (the shift is not determined by the overlap: the best shift is the smallest overlap allowed,
-        i.e. the data want less overlap than that, or the cost is flat over more than 2 flat_width).
+        i.e. the data want less overlap than that, or it is 0 because the data want the sign that
+        ``direction`` excludes, or the cost is flat over more than 2 flat_width).
 
     References
     ----------
@@ -176,6 +183,10 @@ def pair_shift(xa, ya, xb, yb, vertical=False, min_overlap=0.5, step=0.02, flat_
 
     need = min(min_overlap, xa[-1] - xa[0], xb[-1] - xb[0])
     lo, hi = xa[0] - xb[-1] + need, xa[-1] - xb[0] - need
+    if direction > 0:
+        lo = min(max(lo, 0.0), hi)
+    elif direction < 0:
+        hi = max(min(hi, 0.0), lo)
     trials = np.arange(lo, hi + 0.5 * step, step) if hi > lo else np.array([0.5 * (lo + hi)])
     costs = np.array([_pair_cost(xa, ya, xb, yb, d, vertical)[0] for d in trials])
     k = int(np.argmin(costs))
@@ -199,7 +210,8 @@ def pair_shift(xa, ya, xb, yb, vertical=False, min_overlap=0.5, step=0.02, flat_
 def overlap_shifts(logw, l1, l2, sweep, n_T, j0, quantity="moduli", vertical=False, min_overlap=0.5):
     """log10 a_j, log10 b_j of every sweep from the overlap of neighbours, chained from the sweep j0
     (the one at or nearest T_ref, a = b = 1) outwards: each warmer sweep is laid on its colder
-    neighbour, each colder sweep on its warmer one (:func:`pair_shift`), and the shifts add up.
+    neighbour, each colder sweep on its warmer one (:func:`pair_shift`, with the sign the temperature
+    order demands: log10 a_j does not increase with T), and the shifts add up.
 
     Parameters
     ----------
@@ -234,7 +246,7 @@ def overlap_shifts(logw, l1, l2, sweep, n_T, j0, quantity="moduli", vertical=Fal
     for j, ref in [(j, j - 1) for j in range(j0 + 1, n_T)] + [(j, j + 1) for j in range(j0 - 1, -1, -1)]:
         a, b = sweep == ref, sweep == j
         pair = pair_shift(logw[a], tuple(c[a] for c in curves), logw[b], tuple(c[b] for c in curves),
-                          vertical and quantity != "tan_delta", min_overlap)
+                          vertical and quantity != "tan_delta", min_overlap, direction=1 if j < ref else -1)
         off = pair.offset
         if vertical and quantity == "tan_delta":
             off = _pair_cost(logw[a], (l1[a], l2[a]), logw[b], (l1[b], l2[b]), pair.shift, True)[1]
@@ -549,102 +561,3 @@ def build_master_curve(T, sweep, omega, storage, loss, T_ref, method="overlap", 
         wres = np.zeros(n_T)
     r = residual(log_a, lb)
     return Shifts(log_a, lb, C1, C2, float(T_ref), _per_sweep_rms(r, sweep, n_T), wres, overlap, misfit, edge)
-
-
-def relaxation_times(omega, per_decade=3, pad=1.0):
-    """Geometric grid of relaxation times (s) covering 1/omega of the data with ``pad`` decades
-    to spare at both ends, ``per_decade`` times per decade.
-
-    Parameters
-    ----------
-    omega : array
-        (Reduced) angular frequencies of the data (rad/s).
-    """
-    lo = -np.log10(np.max(omega)) - pad
-    hi = -np.log10(np.min(omega)) + pad
-    return np.logspace(lo, hi, int(np.ceil((hi - lo) * per_decade)) + 1)
-
-
-def _basis(omega, times):
-    """E', E'' of unit Prony terms (m, K) (through :func:`roughcontact.physics.viscoelastic.prony_modulus`)."""
-    return prony_modulus(np.asarray(omega, dtype=float)[:, None], 0.0, np.eye(times.size), times)
-
-
-def fit_prony(omega, storage, loss, times):
-    """Generalized Maxwell fit E = E0 + sum_k E_k i w tau_k / (1 + i w tau_k) with E0, E_k >= 0 to
-    E' and E'' (relative residuals, non-negative least squares): a causal master curve.
-
-    Parameters
-    ----------
-    omega, storage, loss : arrays (m,)
-        Reduced angular frequency (rad/s), E' and E'' (Pa, > 0) at T_ref.
-    times : array (K,)
-        Relaxation times (s).
-
-    Returns
-    -------
-    (E0, moduli, residual) : (float (Pa), array (K,) (Pa), float)
-        The spectrum and the rms relative residual of E' and E''.
-
-    References
-    ----------
-    docs/theory.md, section "Master curves from DMA data"; Tschoegl (1989), ch. 4.
-    """
-    from scipy.optimize import nnls
-
-    S, L = _basis(omega, times)
-    M = np.vstack([np.column_stack([np.ones_like(omega), S]) / storage[:, None],
-                   np.column_stack([np.zeros_like(omega), L]) / loss[:, None]])
-    scale = np.linalg.norm(M, axis=0)
-    scale = np.where(scale > 0, scale, 1.0)
-    coef, rnorm = nnls(M / scale, np.ones(M.shape[0]), maxiter=50 * M.shape[1])
-    coef = coef / scale
-    return float(coef[0]), coef[1:], float(rnorm / np.sqrt(M.shape[0]))
-
-
-def kramers_kronig_deviation(omega, storage, loss, times, sweep):
-    r"""E' rebuilt from E'' alone, and its relative deviation from the measured E'.
-
-    A spectrum E_k >= 0 is fitted to E'' (relative residuals, non-negative least squares). By
-    Kramers-Kronig the loss modulus fixes E' up to a constant; within one sweep's window the
-    relaxations the data cannot see (far beyond the data, or in a gap between sweeps) add a
-    constant too (omega tau >> 1 there: E_k; omega tau << 1: nothing), so one constant c_j per
-    sweep is fitted to E' last:
-
-    .. math:: E'_{KK}(\omega) = c_j + \sum_k E_k \frac{\omega^2\tau_k^2}{1 + \omega^2\tau_k^2}
-
-    Causal data (that also superpose) give deviations at the noise level; an E' whose variation
-    across a sweep does not follow from its E'' does not.
-
-    Parameters
-    ----------
-    omega, storage, loss : arrays (m,)
-        Reduced angular frequency (rad/s), E' and E'' (Pa, > 0).
-    times : array (K,)
-        Relaxation times (s).
-    sweep : int array (m,)
-        Sweep of each point.
-
-    Returns
-    -------
-    (rebuilt, deviation) : arrays (m,)
-        E'_KK (Pa) and E'_KK / E' - 1 (dimensionless).
-
-    References
-    ----------
-    docs/theory.md, section "Master curves from DMA data"; Tschoegl (1989), ch. 4; Booij & Thoone,
-    Rheol. Acta 21, 15 (1982).
-    """
-    from scipy.optimize import nnls
-
-    S, L = _basis(omega, times)
-    M = L / loss[:, None]
-    scale = np.linalg.norm(M, axis=0)
-    scale = np.where(scale > 0, scale, 1.0)
-    coef = nnls(M / scale, np.ones(omega.size), maxiter=50 * M.shape[1])[0] / scale
-    rebuilt = S @ coef
-    w = 1.0 / storage ** 2
-    for j in np.unique(sweep):
-        mine = sweep == j
-        rebuilt[mine] += np.sum((storage[mine] - rebuilt[mine]) * w[mine]) / np.sum(w[mine])
-    return rebuilt, rebuilt / storage - 1.0

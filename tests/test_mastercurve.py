@@ -1,4 +1,5 @@
-"""Master curves from DMA sweeps (modulus source ``dma``; physics/mastercurve.py, pipeline/dma.py).
+"""Master curves from DMA sweeps (modulus source ``dma``; physics/mastercurve.py,
+physics/relaxation_spectrum.py, pipeline/dma.py).
 
 Synthetic sweeps are made from a known relaxation spectrum shifted by a known WLF law (and
 optionally a known vertical shift), with 1 % multiplicative noise: the construction must give back
@@ -17,7 +18,7 @@ import pytest
 from roughcontact import engine, scene as scenes
 from roughcontact.cli import main
 from roughcontact.errors import UserError
-from roughcontact.physics import mastercurve as mc, viscoelastic as ve
+from roughcontact.physics import mastercurve as mc, relaxation_spectrum as rs, viscoelastic as ve
 
 QUIET = engine.Reporter(None)
 
@@ -109,7 +110,7 @@ def test_wlf_fit_of_exact_shifts_is_exact_and_moves_with_the_reference():
 def test_prony_fit_reproduces_the_master_curve():
     T, sweep, w, Ep, Epp = sweeps(np.arange(-30, 61, 10.0), noise=0.0)
     reduced = w * 10.0 ** ve.wlf_log10_shift(T, T_REF, C1, C2)
-    E0, moduli, residual = mc.fit_prony(reduced, Ep, Epp, mc.relaxation_times(reduced, 4))
+    E0, moduli, residual = rs.fit_prony(reduced, Ep, Epp, rs.relaxation_times(reduced, 4))
     assert residual < 0.01 and np.all(moduli >= 0) and E0 >= 0
 
 
@@ -121,12 +122,12 @@ def test_prony_fit_reproduces_the_master_curve():
 def test_causal_data_pass_and_noncausal_data_are_far_off():
     T, sweep, w, Ep, Epp = sweeps(np.arange(-30, 61, 10.0))
     reduced = w * 10.0 ** ve.wlf_log10_shift(T, T_REF, C1, C2)
-    times = mc.relaxation_times(reduced, 4)
+    times = rs.relaxation_times(reduced, 4)
     rms = lambda d: np.array([np.sqrt(np.mean(d[sweep == j] ** 2)) for j in range(10)])  # noqa: E731
-    _, good = mc.kramers_kronig_deviation(reduced, Ep, Epp, times, sweep)
+    _, good = rs.kramers_kronig_deviation(reduced, Ep, Epp, times, sweep)
     assert np.all(rms(good) < 0.03)
     flat = np.full_like(Ep, 5e7)  # E' without dispersion, though E'' shows strong loss: not causal
-    _, bad = mc.kramers_kronig_deviation(reduced, flat, Epp, times, sweep)
+    _, bad = rs.kramers_kronig_deviation(reduced, flat, Epp, times, sweep)
     assert np.max(rms(bad)) > 1.0
 
 
@@ -282,6 +283,26 @@ def test_a_flat_storage_modulus_does_not_fix_a_shift_and_says_so():
     T, sweep, w, Ep, Epp = glassy_sweeps(2)
     fit = mc.build_master_curve(T, sweep, w, Ep, Epp, T_REF, quantity="storage")
     assert fit.at_edge[:3].any()
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_overlap_shifts_never_run_against_the_temperature_order(seed):
+    """Relaxation times shorten on heating, so log10 a_T does not increase with T, even where a flat E'
+    (glassy plateau, 1 % noise) lets the overlap of two sweeps prefer the wrong sign."""
+    T, sweep, w, Ep, Epp = glassy_sweeps(seed)
+    fit = mc.build_master_curve(T, sweep, w, Ep, Epp, T_REF, quantity="storage")
+    assert np.all(np.diff(fit.log10_aT) <= 0.0)
+
+
+def test_a_pair_that_wants_the_wrong_sign_stays_unshifted_and_is_flagged():
+    """Sweep b is sweep a moved 0.3 decades up in frequency: laid on a as a colder sweep (shift >= 0) it
+    comes back at +0.3; as a warmer one (shift <= 0) it stays at 0 and is flagged."""
+    x = np.linspace(0.0, 3.0, 31)
+    curve = lambda x: np.tanh(x - 1.5)  # noqa: E731
+    free = mc.pair_shift(x, (curve(x),), x, (curve(x + 0.3),), direction=+1)
+    assert free.shift == pytest.approx(0.3, abs=0.01) and not free.at_edge
+    held = mc.pair_shift(x, (curve(x),), x, (curve(x + 0.3),), direction=-1)
+    assert held.shift == pytest.approx(0.0, abs=1e-9) and held.at_edge
 
 
 def test_binned_long_sweeps_give_the_shifts_of_the_short_ones():

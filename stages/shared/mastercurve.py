@@ -1,7 +1,8 @@
 """The ``dma`` source of the ``modulus`` stage: multi-temperature DMA frequency sweeps (read in SI by
 the engine's ``dma`` reader) shifted onto a master curve, the WLF law fitted to the shifts, a
 causal (Prony) master curve and the Kramers-Kronig check. Kernels:
-:mod:`roughcontact.physics.mastercurve`; docs/theory.md, section "Master curves from DMA data".
+:mod:`roughcontact.physics.mastercurve` and :mod:`roughcontact.physics.relaxation_spectrum`; docs/theory.md,
+section "Master curves from DMA data".
 
 Not a stage of its own: :mod:`roughcontact.stages.modulus` declares the keys and outputs.
 """
@@ -20,11 +21,9 @@ from roughcontact.physics.mastercurve import (
     SHIFT_QUANTITIES,
     bin_sweeps,
     build_master_curve,
-    fit_prony,
-    kramers_kronig_deviation,
     overlap_shifts,
-    relaxation_times,
 )
+from roughcontact.physics.relaxation_spectrum import fit_prony, kramers_kronig_deviation, relaxation_times
 from roughcontact.physics.viscoelastic import loss_modulus_from_tan_delta, prony_modulus
 from roughcontact.stage import Param, UserError, Var
 
@@ -224,7 +223,8 @@ def _warn_overlap(spec, data, overlap, at_edge, T) -> None:
         return
     listed = "; ".join(f"{T[j] - 273.15:.4g} °C on {T[k] - 273.15:.4g} °C" for j, k in pairs)
     message = (f"the overlap of these neighbouring sweeps does not fix their shift on {spec['shift_on']} (the best "
-               f"shift wants less than {spec['min_overlap']:g} decades of overlap, or the curves are flat there): "
+               f"shift wants less than {spec['min_overlap']:g} decades of overlap, or a sign against the temperature "
+               f"order, or the curves are flat there): "
                f"{listed}. Measure closer temperatures or wider frequency ranges, or shift on another quantity "
                "(shift_on: a flat E' on a glassy or rubbery plateau does not fix a shift; E'' or tan delta may)")
     if spec["no_overlap"] == "error":
