@@ -37,10 +37,10 @@ def figure_fit(results):
         q = ds[f"q_fit_{name}"].values
         C, err = ds[f"psd_fit_data_{name}"].values, ds[f"psd_fit_data_error_{name}"].values
         known = np.isfinite(err).any()
-        if known:
-            lower = np.minimum(err, 0.95 * C)  # a bar below zero cannot be drawn on a log axis
-            ax.errorbar(q, C, yerr=(lower, err), fmt="o", ms=3, color=colour, elinewidth=0.8, capsize=0,
-                        label=f"{name}: measured bins (bars: 1 s.e.)")
+        if known:  # bars of one standard error of ln C (the fit's weights), symmetric on the log axis
+            factor = np.exp(err / C)
+            ax.errorbar(q, C, yerr=(C - C / factor, C * factor - C), fmt="o", ms=3, color=colour, elinewidth=0.8,
+                        capsize=0, label=f"{name}: measured bins (bars: C exp(+-s.e./C))")
         else:
             ax.loglog(q, C, "o", ms=3, color=colour, label=f"{name}: PSD file (no errors known)")
         band = json.loads(ds.attrs[f"fit_{name}"])["band_per_m"]
@@ -52,7 +52,8 @@ def figure_fit(results):
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_ylabel("C(q) (m$^4$, Persson convention)")
-    ax.set_title("Self-affine fits of the measured spectra")
+    ax.set_title("Self-affine fits of the measured spectra\n(fitted in log C, the bias of few-mode bins removed: "
+                 "those scatter below the fit)", fontsize=10)
     ax.grid(True, which="both", alpha=0.3)
     for y in (-2, 2):
         res.axhline(y, color="0.5", lw=0.8, ls="--")

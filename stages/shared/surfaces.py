@@ -8,7 +8,7 @@ import dataclasses
 from typing import NamedTuple
 
 from roughcontact.physics.spectra import CONVENTIONS
-from roughcontact.stage import REQUIRED, ByKind, FileInput, Param, Section, UserError, register_section
+from roughcontact.stage import REQUIRED, ByKind, FileInput, Param, Section, Shape, UserError, register_section
 
 SURFACES = ("substrate", "solid")
 
@@ -29,7 +29,10 @@ def surface_bands(psd, topography=None, fit=None) -> dict[str, Band]:
     ``psd`` is the psd stage's StageInput (its surface sections and files, SI); ``topography``
     the Shape of the topography stage's result, for measured maps (left out without it); ``fit``
     the Shape of the fit stage's result, for fitted surfaces (kind fit: its ``qL`` and ``q1``,
-    default the fitted band)."""
+    default the fitted band; by default the psd stage's upstream fit, a Shape or a Dataset)."""
+    if fit is None and "fit" in getattr(psd, "upstream", {}):
+        fit = psd.upstream["fit"]
+        fit = fit if isinstance(fit, Shape) else Shape.of(fit)
     bands = {}
     for name in SURFACES:
         spec = psd[name]
@@ -43,7 +46,7 @@ def surface_bands(psd, topography=None, fit=None) -> dict[str, Band]:
         elif spec["kind"] == "fit":
             if fit is not None and f"q_fit_{name}" in fit.ranges:
                 lo, hi = fit.ranges[f"q_fit_{name}"]
-                bands[name] = Band(spec.get("qL") or lo, spec.get("q1") or hi, f"{name}.q1")
+                bands[name] = Band(spec.get("qL") or lo, spec.get("q1") or hi, f"{name}.qL")
         elif topography is not None and f"q_{name}_measured" in topography.ranges:  # topography, container
             lo, hi = topography.ranges[f"q_{name}_measured"]
             key = f"{name}.{'container' if spec['kind'] == 'container' else 'files'}"
@@ -99,6 +102,8 @@ MEASURED_KINDS = ("topography", "container")
 #: the condition of :class:`~roughcontact.stage.Upstream` under which a stage needs the topography
 #: stage: a surface of a measured kind
 MEASURED_SURFACES = {f"{name}.kind": MEASURED_KINDS for name in SURFACES}
+#: the condition under which the psd stage needs the fit stage: a fitted surface
+FITTED_SURFACES = {f"{name}.kind": ("fit",) for name in SURFACES}
 #: the same for the stages that also analyse the maps of a fitted surface (kind 'fit' of maps or a container)
 MAPPED_SURFACES = {**MEASURED_SURFACES, **{f"{name}.of": MEASURED_KINDS for name in SURFACES}}
 
