@@ -193,3 +193,23 @@ def test_a_fit_of_a_surface_that_is_not_measured_is_refused_before_anything_is_w
         rc.run(raw, tmp_path / "out", progress=False)
     assert err.value.key == "fit.surfaces" and "\n" not in str(err.value)
     assert not list((tmp_path / "out").glob("**/*.nc"))
+
+
+def test_a_psd_file_of_the_analytic_spectrum_is_fitted_exactly(tmp_path):
+    """kind = "fit" of a PSD file holding the analytic spectrum (no errors: equal weights): the
+    fit stage gives H, C0 and q0 to 1e-6, and the psd stage's spectrum is the file's within its band."""
+    q = np.geomspace(1e5, 1e8, 40)
+    np.savetxt(tmp_path / "psd.txt", np.column_stack([q, self_affine_psd(q, 0.7, q[0], 1e6, q[-1], 2e-30)]),
+               header="q [1/m]  C [m^4]")
+    raw = {"material": {"E": "10 MPa", "nu": 0.5}, "load": {"p": "0.1 MPa"},
+           "substrate": {"kind": "fit", "of": "psd_file", "path": str(tmp_path / "psd.txt")},
+           "outputs": {"variables": ["psd_combined", "hurst_fit_substrate"]}}
+    res = rc.compute(raw, progress=False)["base"]
+    fit = res["fit"]
+    assert float(fit["hurst_fit_substrate"]) == pytest.approx(0.7, abs=1e-6)
+    assert float(fit["C0_fit_substrate"]) == pytest.approx(2e-30, rel=1e-6)
+    assert float(fit["q0_fit_substrate"]) == pytest.approx(1e6, rel=1e-6)
+    grid = res["psd"]["q"].values
+    assert res["psd"]["psd_substrate"].values == pytest.approx(self_affine_psd(grid, 0.7, q[0], 1e6, q[-1], 2e-30),
+                                                               rel=1e-6)
+    assert res["psd"]["psd_substrate"].attrs["extrapolation"].startswith("none")
