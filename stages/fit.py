@@ -57,19 +57,19 @@ register_section(Section(
     doc="self-affine fits of measured spectra (H, C0, roll-off q0) with confidence intervals",
 ))
 
-#: the fitted quantities: (name, units, long name, the fit's parameter or rms index, log-normal interval)
+#: the fitted quantities: (name, units, long name, short name)
 QUANTITIES = (
-    ("hurst_fit", "1", "Hurst exponent H of the fit"),
-    ("C0_fit", "m^4", "plateau C0 of the fitted PSD"),
-    ("q0_fit", "1/m", "roll-off wavenumber q0 of the fit"),
-    ("hrms_fit", "m", "rms height of the fit over the band"),
-    ("rms_slope_fit", "1", "rms slope of the fit over the band"),
-    ("rms_curvature_fit", "1/m", "rms curvature of the fit over the band"),
+    ("hurst_fit", "1", "Hurst exponent H of the fit", "H"),
+    ("C0_fit", "m^4", "plateau C0 of the fitted PSD", "C0"),
+    ("q0_fit", "1/m", "roll-off wavenumber q0 of the fit", "q0"),
+    ("hrms_fit", "m", "rms height of the fit", "hrms"),
+    ("rms_slope_fit", "1", "rms slope of the fit", "rms slope"),
+    ("rms_curvature_fit", "1/m", "rms curvature of the fit", "curvature"),
 )
 MEASURED = (
-    ("hrms_measured", "m", "rms height of the measured bins"),
-    ("rms_slope_measured", "1", "rms slope of the measured bins"),
-    ("rms_curvature_measured", "1/m", "rms curvature of the measured bins"),
+    ("hrms_measured", "m", "rms height of the measured bins", "hrms"),
+    ("rms_slope_measured", "1", "rms slope of the measured bins", "rms slope"),
+    ("rms_curvature_measured", "1/m", "rms curvature of the measured bins", "rms curvature"),
 )
 
 
@@ -129,6 +129,7 @@ def describe_fit(inp: StageInput) -> Shape:
         ranges[f"q_fit_{name}"] = (float(q.min()), float(q.max()))
         coords[f"q_fit_{name}"] = np.sort(q)
         variables |= {f"{v}_{name}" for v, *_ in (*QUANTITIES, *MEASURED)}
+        variables |= {f"{v}_{end}_{name}" for v, *_ in QUANTITIES for end in ("low", "high")}
         variables |= {f"{v}_{name}" for v in ("psd_fit_data", "psd_fit_data_error", "psd_fit", "fit_residual")}
     topo = inp.upstream.get("topography")
     approximate = tuple(d for d in sizes if topo is not None and measured_spec(inp[d[6:]]) is not None)
@@ -165,7 +166,11 @@ def _surface(inp: StageInput, name: str) -> tuple[dict, dict]:
     except ValueError as exc:
         raise UserError(f"the {name}'s spectrum cannot be fitted: {exc}", key="fit.surfaces") from None
     dim = f"q_fit_{name}"
-    out = {f"{k}_{name}": ((), v, a) for k, (v, a) in _estimates(fit, level, profile).items()}
+    out = {}
+    for k, (v, a) in _estimates(fit, level, profile).items():
+        out[f"{k}_{name}"] = ((), v, a)
+        out[f"{k}_low_{name}"] = ((), a.get("ci_low", np.nan), {"ci_level": level})
+        out[f"{k}_high_{name}"] = ((), a.get("ci_high", np.nan), {"ci_level": level})
     m = rms_from_moments(*psd_moments(q, C), profile=profile)
     out.update({f"{k}_{name}": ((), float(v), {}) for (k, *_), v in zip(MEASURED, m, strict=True)})
     out[f"psd_fit_data_{name}"] = ((dim,), C, {"source": source})
@@ -201,7 +206,19 @@ def compute_fit(inp: StageInput) -> xr.Dataset:
 
 
 def _vars(table, surface):
-    return {f"{v}_{surface}": Var(u, f"{ln[:40]} ({surface})"[:49]) for v, u, ln in table}
+    return {f"{v}_{surface}": Var(u, f"{ln} ({surface})", attrs={"comment": "over the fitted band"})
+            for v, u, ln, _ in table}
+
+
+def _bounds(surface):
+    """The lower and upper ends of the fitted quantities' confidence intervals, as variables (for tables)."""
+    out = {}
+    for v, u, _, short in QUANTITIES:
+        for end, word in (("low", "lower"), ("high", "upper")):
+            out[f"{v}_{end}_{surface}"] = Var(u, f"{word} CI bound of the fit's {short} ({surface})",
+                                              attrs={"comment": "probability content: attribute ci_level; NaN where "
+                                                                "the quantity has no interval (q0 not resolved)"})
+    return out
 
 
 STAGE = register(
@@ -219,6 +236,7 @@ STAGE = register(
         outputs={
             **{k: v for s in SURFACES for k, v in _vars(QUANTITIES, s).items()},
             **{k: v for s in SURFACES for k, v in _vars(MEASURED, s).items()},
+            **{k: v for s in SURFACES for k, v in _bounds(s).items()},
             **{f"psd_fit_data_{s}": Var("m^4", f"PSD bins fitted ({s})") for s in SURFACES},
             **{f"psd_fit_data_error_{s}": Var("m^4", f"standard error of the fitted bins ({s})") for s in SURFACES},
             **{f"psd_fit_{s}": Var("m^4", f"fitted self-affine PSD at the bins ({s})") for s in SURFACES},
