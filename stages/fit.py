@@ -112,8 +112,9 @@ def _bins(inp: StageInput, name: str):
 
 def _band_shape(inp: StageInput, name: str):
     """The wavenumbers of the bins that will be fitted (approximate for maps before they are analysed)."""
-    if measured_spec(inp[name]) is None:
-        return np.asarray(inp.files[f"{name}.path"].q, dtype=float)
+    if measured_spec(inp[name]) is None:  # a PSD file: its rows with a positive PSD
+        spectrum = inp.files[f"{name}.path"]
+        return np.asarray(spectrum.q, dtype=float)[np.isfinite(spectrum.values) & (spectrum.values > 0)]
     return np.asarray(inp.upstream["topography"].values.get(f"q_{name}_measured", []), dtype=float)
 
 
@@ -226,8 +227,9 @@ STAGE = register(
         name="fit",
         version="1",
         compute=compute_fit,
-        reads=(*surface_reads({"psd_file": SPECTRUM_KEYS, "topography": ("analysis",),
-                               "container": ("analysis",), "fit": FIT_DATA_KEYS, "*": ()}),
+        # a measured map's bins come from the topography stage (its key covers their keys)
+        reads=(*surface_reads({"psd_file": SPECTRUM_KEYS, "topography": (), "container": (), "fit": FIT_DATA_KEYS,
+                               "*": ()}),
                "fit.surfaces", "fit.level", "fit.rolloff"),
         files=tuple(spectrum_file(name) for name in SURFACES),
         needs=(Upstream("topography", when=MAPPED_SURFACES),),

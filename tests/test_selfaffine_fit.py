@@ -182,16 +182,17 @@ def test_builtin_fit_scene_runs():
     assert np.all(np.diff(area) > 0)
 
 
-@pytest.mark.parametrize("bad", [
-    {"fit": {"surfaces": ["solid"]}, "solid": {"kind": "self_affine", "H": 0.8, "qL": "1e5 1/m", "q1": "1e8 1/m",
-                                               "hrms": "1 nm"}},
-    {"substrate": {"kind": "smooth"}},
+@pytest.mark.parametrize(("bad", "key"), [
+    ({"fit": {"surfaces": ["solid"]}, "solid": {"kind": "self_affine", "H": 0.8, "qL": "1e5 1/m", "q1": "1e8 1/m",
+                                                "hrms": "1 nm"}}, "fit.surfaces"),
+    ({"substrate": {"kind": "smooth"}}, "fit.surfaces"),
+    ({"substrate": {"kind": "fit", "of": "container"}}, "substrate.container"),  # a fit of no data
 ])
-def test_a_fit_of_a_surface_that_is_not_measured_is_refused_before_anything_is_written(tmp_path, bad):
+def test_a_fit_of_a_surface_that_is_not_measured_is_refused_before_anything_is_written(tmp_path, bad, key):
     raw = {**_scene(tmp_path, {"kind": "topography"}, outputs={"variables": ["hurst_fit_substrate"]}), **bad}
     with pytest.raises(UserError) as err:
         rc.run(raw, tmp_path / "out", progress=False)
-    assert err.value.key == "fit.surfaces" and "\n" not in str(err.value)
+    assert err.value.key == key and "\n" not in str(err.value)
     assert not list((tmp_path / "out").glob("**/*.nc"))
 
 
