@@ -51,8 +51,8 @@ register_section(Section(
               doc="the measured surfaces to fit ('substrate', 'solid'; default: every measured one)"),
         Param("level", "quantity", "", default=0.95, lo=0.0, hi=1.0, lo_open=True, hi_open=True,
               doc="probability content of the confidence intervals"),
-        Param("rolloff", "choice", default="fit", choices=("fit", "none"),
-              doc="fit the roll-off q0, or a power law over the whole band ('none': q0 = its lower end)"),
+        Param("rolloff", "bool", default=True,
+              doc="fit the roll-off q0 (false: a power law over the whole band, q0 = its lower end)"),
     ),
     doc="self-affine fits of measured spectra (H, C0, roll-off q0) with confidence intervals",
 ))
@@ -163,7 +163,7 @@ def _surface(inp: StageInput, name: str) -> tuple[dict, dict]:
     level = float(inp["fit.level"])
     q, C, err, profile, source = _bins(inp, name)
     try:
-        fit = fit_self_affine(q, C, err, rolloff=inp["fit.rolloff"] == "fit")
+        fit = fit_self_affine(q, C, err, rolloff=bool(inp["fit.rolloff"]))
     except ValueError as exc:
         raise UserError(f"the {name}'s spectrum cannot be fitted: {exc}", key="fit.surfaces") from None
     dim = f"q_fit_{name}"

@@ -59,6 +59,17 @@ def test_exact_analytic_psd_gives_its_parameters(q0, errors):
         assert fit.cov[2, 2] == 0.0  # q0 held at the band's end: no interval claimed for it
 
 
+def test_a_power_law_fit_holds_q0_at_the_band_end():
+    """rolloff = False: a power law over the band (q0 its lower end, no interval), exact for a
+    power law and misfitting a rolled-off spectrum (chi^2 far above its dof)."""
+    q = np.geomspace(1e5, 1e8, 61)
+    for q0, exact in ((1e5, True), (1.7e6, False)):
+        C = self_affine_psd(q, 0.73, q[0], q0, q[-1], 3e-30)
+        fit = fit_self_affine(q, C, C * 1e-3, rolloff=False)
+        assert fit.rolloff == "not fitted" and fit.q0 == q[0] and fit.cov[2, 2] == 0.0
+        assert (fit.chi2 < 1e-6 * fit.dof) if exact else (fit.chi2 > 100 * fit.dof)
+
+
 def test_moments_of_the_power_law_are_exact():
     """m_a = 2 pi int q^(a+1) C dq of a pure power law on [qL, q1], in closed form, and
     hrms from the closed-form self-affine factor."""
