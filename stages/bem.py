@@ -411,7 +411,9 @@ register(
         needs=("psd", "contact", "separation"),
         # measured maps (kind = "topography"): the engine reads them; used when bem.surfaces allows.
         # Synthesized surfaces come from the psd stage's spectra: of those sections, only the kind
-        reads=(*MATERIAL_KEYS, "load.p", "interface.eta", *surface_reads({"topography": MAP_KEYS, "*": ()}),
+        # (of a fitted surface's maps, which the engine reads too, what reading them takes)
+        reads=(*MATERIAL_KEYS, "load.p", "interface.eta",
+               *surface_reads({"topography": MAP_KEYS, "fit": ("height_unit", "fill_undefined"), "*": ()}),
                "bem.surfaces", "bem.grid", "bem.realizations", "bem.seed", "bem.pixels_per_wavelength",
                "numerics.bem_tolerance", "numerics.bem_stress_bins", "numerics.sigma_width", *VARIANT_KEYS,
                *FIELD_KEYS),

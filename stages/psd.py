@@ -7,6 +7,8 @@ Kernels: :mod:`roughcontact.physics.spectra`. The surface sections are declared 
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import xarray as xr
 
@@ -22,12 +24,23 @@ from roughcontact.physics.spectra import (
     self_affine_psd,
 )
 from roughcontact.physics.uncertainty import combined_psd_error
-from roughcontact.stage import FileInput, Shape, Stage, StageInput, Upstream, UserError, Var, register
+from roughcontact.stage import SceneWarning, Shape, Stage, StageInput, Upstream, UserError, Var, register
 
 from .shared.grid import scope_attrs
 from .shared.maps import measured_coherence_on_grid, measured_psd_on_grid
 from .shared.measured import coherence_error_grid, drawn_coherence, drawn_psd, psd_error_grid
-from .shared.surfaces import MEASURED_SURFACES, SURFACES, is_measured, is_rough, surface_bands, surface_reads
+from .shared.surfaces import (
+    FITTED_SURFACES,
+    MEASURED_SURFACES,
+    SPECTRUM_KEYS,
+    SURFACES,
+    is_fitted,
+    is_measured,
+    is_rough,
+    spectrum_file,
+    surface_bands,
+    surface_reads,
+)
 
 
 def _check_extent(name: str, spec: dict, spectrum, lo: float, hi: float) -> None:
@@ -70,7 +83,7 @@ def _measured_knots(inp: StageInput, topography: Shape | None) -> list[float]:
     knots = []
     for name in SURFACES:
         spec = inp[name]
-        if not is_rough(spec) or spec["kind"] == "self_affine":
+        if not is_rough(spec) or spec["kind"] in ("self_affine", "fit"):
             continue
         if spec["kind"] == "psd_file":
             q = inp.files[f"{name}.path"].q
@@ -87,11 +100,15 @@ def _q_range(inp: StageInput, topography: Shape | None) -> tuple[float, float, l
     bands = surface_bands(inp, topography)
     for name in SURFACES:
         spec = inp[name]
+        if is_fitted(spec) and name not in bands:
+            raise UserError("the fitted data give no wavenumber bins", key=f"{name}.of")
         if is_rough(spec) and is_measured(spec) and name not in bands:
             raise UserError("the measured maps give no wavenumber bins",
                             key=f"{name}.{'container' if spec['kind'] == 'container' else 'files'}")
     knots = [inp[name][k] for name in SURFACES if is_rough(inp[name]) and inp[name]["kind"] == "self_affine"
              for k in ("qL", "q0", "q1")] + _measured_knots(inp, topography)
+    knots += [k for name in SURFACES if is_fitted(inp[name]) and name in bands
+              for k in (bands[name].lo, _fitted(inp, name)["q0"], bands[name].hi)]
     lo = inp["grid.q_min"] or (min(b.lo for b in bands.values()) if bands else None)
     hi = inp["grid.q_max"] or (max(b.hi for b in bands.values()) if bands else None)
     if lo is None or hi is None:
@@ -126,6 +143,42 @@ def _check_coverage(inp: StageInput, topography: Shape | None, lo: float, hi: fl
                         "same grid" + (f" ({why})" if why else ""), key="interface.eta")
 
 
+def _fitted(inp: StageInput, name: str) -> dict:
+    """The fitted self-affine model of surface ``name`` (kind fit): H, C0 (m^4, NaN before the fit
+    stage has computed), q0 (1/m; the fitted band's lower end before) and the fitted band (1/m)."""
+    fit = inp.upstream["fit"]
+    lo, hi = fit.ranges[f"q_fit_{name}"] if isinstance(fit, Shape) else (
+        float(fit[f"q_fit_{name}"].min()), float(fit[f"q_fit_{name}"].max()))
+    if isinstance(fit, Shape):
+        return {"H": np.nan, "C0": np.nan, "q0": lo, "band": (lo, hi)}
+    return {"H": float(fit[f"hurst_fit_{name}"]), "C0": float(fit[f"C0_fit_{name}"]),
+            "q0": float(fit[f"q0_fit_{name}"]), "band": (lo, hi)}
+
+
+def _warn_extrapolation(inp: StageInput, lo: float, hi: float) -> None:
+    """A fitted surface used beyond the band it was fitted on is extrapolated: say so."""
+    for name in SURFACES:
+        if not is_fitted(inp[name]) or "fit" not in inp.upstream:
+            continue
+        flo, fhi = _fitted(inp, name)["band"]
+        beyond = _beyond(inp[name], (flo, fhi), lo, hi)
+        if beyond:
+            warnings.warn(SceneWarning(
+                f"{name}: the fitted self-affine spectrum is extrapolated {beyond} 1/m, beyond the band it was "
+                f"fitted on [{flo:.4g}, {fhi:.4g}] 1/m (the q grid [{lo:.4g}, {hi:.4g}] 1/m, {name}.qL/q1); "
+                "results there rest on the model, not on the measurement"), stacklevel=2)
+
+
+def _beyond(spec: dict, band: tuple[float, float], lo: float, hi: float) -> str:
+    """Where a fitted surface's spectrum on the grid [lo, hi] (nonzero on [qL, q1]) leaves the
+    fitted band: e.g. 'above 4e7' ('' where it does not)."""
+    qL, q1 = spec.get("qL") or band[0], spec.get("q1") or band[1]
+    a, b = max(lo, qL), min(hi, q1)
+    parts = [f"below {band[0]:.6g}" if a < band[0] * (1 - 1e-6) else "",
+             f"above {band[1]:.6g}" if b > band[1] * (1 + 1e-6) else ""]
+    return " and ".join(p for p in parts if p)
+
+
 def describe_psd(inp: StageInput) -> Shape:
     """The q grid (its size and range, which the files or measured maps must cover; its nodes up
     to a million, approximate where they include
@@ -135,10 +188,13 @@ def describe_psd(inp: StageInput) -> Shape:
     topography = inp.upstream.get("topography")
     lo, hi, knots = _q_range(inp, topography)
     _check_coverage(inp, topography, lo, hi)
+    _warn_extrapolation(inp, lo, hi)
     size = log_grid_size(lo, hi, inp["numerics.points_per_decade"], knots)
     grid = {"q": log_grid(lo, hi, inp["numerics.points_per_decade"], knots)} if size <= 10**6 else {}
     # measured bins' mean wavenumbers are nodes of the grid; before the topography stage computes they are approximate
-    approximate = ("q",) if topography is not None and topography.approximate else ()
+    fit = inp.upstream.get("fit")
+    # a fitted surface's roll-off q0 is a node of the grid, known once the fit stage has computed
+    approximate = ("q",) if (topography is not None and topography.approximate) or fit is not None else ()
     return Shape(sizes={"q": size}, ranges={"q": (lo, hi)}, keys={"q": "numerics.points_per_decade"}, coords=grid,
                  attrs=scope_attrs(inp, topography, lo), work={"temporaries": 8, "q": size}, approximate=approximate)
 
@@ -159,6 +215,17 @@ def _surface(inp: StageInput, name: str, q: xr.DataArray, draw):
             C0 = xr.DataArray(spec["C0"])
         shape = xr.DataArray(self_affine_psd(q_values, spec["H"], spec["qL"], spec["q0"], spec["q1"], 1.0), dims=("q",))
         return C0 * shape, attrs, err
+    if is_fitted(spec):
+        model = _fitted(inp, name)
+        qL, q1 = spec.get("qL") or model["band"][0], spec.get("q1") or model["band"][1]
+        values = self_affine_psd(q_values, model["H"], qL, max(model["q0"], qL), q1, model["C0"])
+        lo, hi = model["band"]
+        beyond = _beyond(spec, model["band"], q_values[0], q_values[-1])
+        attrs = {"surface": "self-affine fit of measured data", "H": model["H"], "C0": model["C0"],
+                 "q0": model["q0"], "qL": qL, "q1": q1, "fitted_q_range": f"{lo:.6g} {hi:.6g} 1/m",
+                 "extrapolation": (f"the fitted model, extrapolated {beyond} 1/m (beyond the measured band: the "
+                                   "model, not the data)") if beyond else "none: the grid lies within the fitted band"}
+        return xr.DataArray(values, dims=("q",)), attrs, err
     if is_measured(spec):
         ds = inp.upstream["topography"]
         values, attrs = measured_psd_on_grid(ds, name, q_values, spec["extend"])
@@ -228,28 +295,18 @@ def compute_psd(inp: StageInput) -> xr.Dataset:
     return ds
 
 
-def _files(name: str) -> FileInput:
-    """The measured PSD of surface ``name`` (kind psd_file), read in SI by the spectrum reader."""
-
-    def options(params):
-        spec = params[name]
-        return dict(key=name, convention=spec["convention"], columns=spec["columns"], q_unit=spec["q_unit"],
-                    value_unit=spec["C_unit"], variable=spec["variable"], select=spec["select"],
-                    convention_units={k: unit for k, (unit, _) in CONVENTIONS.items()})
-
-    return FileInput(f"{name}.path", reader="spectrum", options=options)
-
-
 STAGE = register(
     Stage(
         name="psd",
         version="3",
         compute=compute_psd,
         # a measured surface's spectrum comes from the topography stage: of it, only how to extend it
-        reads=(*surface_reads({"topography": ("extend",), "container": ("extend",)}), "interface.eta", "grid.q_min",
-               "grid.q_max", "numerics.points_per_decade", "bands.draws", "bands.seed"),
-        files=(_files("substrate"), _files("solid")),
-        needs=(Upstream("topography", when=MEASURED_SURFACES),),
+        # of a fitted surface its band (the fit stage fits it), and what reading its PSD file (if any) takes
+        reads=(*surface_reads({"topography": ("extend",), "container": ("extend",),
+                               "fit": ("qL", "q1", *SPECTRUM_KEYS)}),
+               "interface.eta", "grid.q_min", "grid.q_max", "numerics.points_per_decade", "bands.draws", "bands.seed"),
+        files=(spectrum_file("substrate"), spectrum_file("solid")),
+        needs=(Upstream("topography", when=MEASURED_SURFACES), Upstream("fit", when=FITTED_SURFACES)),
         check=check_psd,
         describe=describe_psd,
         outputs={

@@ -36,7 +36,7 @@ from .shared.measured import (
     prepared_files,
     unbias_processing,
 )
-from .shared.surfaces import CONTAINER_KEYS, MAP_KEYS, SURFACES, is_measured, surface_reads
+from .shared.surfaces import CONTAINER_KEYS, MAP_KEYS, SURFACES, measured_spec, surface_reads
 
 register_params(
     "numerics",
@@ -165,7 +165,7 @@ def _surface_vars(name, spectra, described, bpd, entered):
 def _prepared(inp: StageInput):
     """The checked and prepared files of each measured surface, the bin edges and the pairing
     (why the files cannot be paired, or None)."""
-    specs = {name: inp[name] for name in SURFACES if is_measured(inp[name])}
+    specs = {name: measured_spec(inp[name]) for name in SURFACES if measured_spec(inp[name]) is not None}
     if not specs:
         raise UserError("no surface has kind = 'topography' or 'container'", key="substrate.kind")
     prepared = {name: prepared_files(name, spec, inp.files) for name, spec in specs.items()}
@@ -252,7 +252,9 @@ register(
         version="4",
         compute=compute_topography,
         # of a measured surface the map keys and the line-scan H; of any other surface only its kind
-        reads=(*surface_reads({"topography": (*MAP_KEYS, "hurst"), "container": (*CONTAINER_KEYS, "hurst"), "*": ()}),
+        # (a fitted surface of maps or a container: the same keys, and what it is fitted to)
+        reads=(*surface_reads({"topography": (*MAP_KEYS, "hurst"), "container": (*CONTAINER_KEYS, "hurst"),
+                               "fit": ("of", *MAP_KEYS, "surface", "hurst"), "*": ()}),
                "numerics.topography_bins_per_decade"),
         describe=describe_topography,
         files=(topography_files("substrate"), topography_files("solid"), container_files("substrate"),

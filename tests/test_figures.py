@@ -34,7 +34,7 @@ from roughcontact import engine, scene as scenes, store  # noqa: E402
 from roughcontact.cli import main, scene_figures  # noqa: E402
 from roughcontact.stages.figures.common import CASE_STYLES, at_zeta, case_of, nominal, reduce_dims  # noqa: E402
 
-FAST = ["default", "friction", "topography", "seal", "elastoplastic"]
+FAST = ["default", "friction", "topography", "seal", "elastoplastic", "fit"]
 SLOW = ["separation", "adhesion", "bem", "bem_topography", "large_sweep", "container", "dma_flash", "validation",
         "interface_bem"]
 #: scenes the CI runs at reduced sizes (their full runs are in SLOW): dotted key -> value

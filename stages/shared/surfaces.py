@@ -4,10 +4,11 @@ stages ask of them (is a surface rough, measured; the band of wavenumbers it is 
 
 from __future__ import annotations
 
+import dataclasses
 from typing import NamedTuple
 
 from roughcontact.physics.spectra import CONVENTIONS
-from roughcontact.stage import ByKind, Param, Section, UserError, register_section
+from roughcontact.stage import REQUIRED, ByKind, FileInput, Param, Section, Shape, UserError, register_section
 
 SURFACES = ("substrate", "solid")
 
@@ -22,11 +23,16 @@ class Band(NamedTuple):
     spans_grid: bool = False
 
 
-def surface_bands(psd, topography=None) -> dict[str, Band]:
+def surface_bands(psd, topography=None, fit=None) -> dict[str, Band]:
     """The :class:`Band` of each rough surface (the measured range for a measured PSD).
 
     ``psd`` is the psd stage's StageInput (its surface sections and files, SI); ``topography``
-    the Shape of the topography stage's result, for measured maps (left out without it)."""
+    the Shape of the topography stage's result, for measured maps (left out without it); ``fit``
+    the Shape of the fit stage's result, for fitted surfaces (kind fit: its ``qL`` and ``q1``,
+    default the fitted band; by default the psd stage's upstream fit, a Shape or a Dataset)."""
+    if fit is None and "fit" in getattr(psd, "upstream", {}):
+        fit = psd.upstream["fit"]
+        fit = fit if isinstance(fit, Shape) else Shape.of(fit)
     bands = {}
     for name in SURFACES:
         spec = psd[name]
@@ -37,6 +43,10 @@ def surface_bands(psd, topography=None) -> dict[str, Band]:
         elif spec["kind"] == "psd_file":
             q = psd.files[f"{name}.path"].q
             bands[name] = Band(float(q[0]), float(q[-1]), f"{name}.path", spec["extend"] == "power_law")
+        elif spec["kind"] == "fit":
+            if fit is not None and f"q_fit_{name}" in fit.ranges:
+                lo, hi = fit.ranges[f"q_fit_{name}"]
+                bands[name] = Band(spec.get("qL") or lo, spec.get("q1") or hi, f"{name}.qL")
         elif topography is not None and f"q_{name}_measured" in topography.ranges:  # topography, container
             lo, hi = topography.ranges[f"q_{name}_measured"]
             key = f"{name}.{'container' if spec['kind'] == 'container' else 'files'}"
@@ -60,14 +70,58 @@ def is_measured(spec) -> bool:
     return spec is not None and spec.get("kind") in MEASURED_KINDS
 
 
+def is_fitted(spec) -> bool:
+    """Whether a surface section is the self-affine fit of measured data (kind 'fit')."""
+    return spec is not None and spec.get("kind") == "fit"
+
+
+def is_fittable(spec) -> bool:
+    """Whether a self-affine fit can be made of a surface: measured data (a PSD file, maps, a
+    container) or a fitted surface."""
+    return spec is not None and spec.get("kind") in (*MEASURED_KINDS, "psd_file", "fit")
+
+
+def measured_spec(spec):
+    """The section of a surface whose height data the topography stage analyses, as the measured
+    kind it is: a measured surface as it stands, a fitted one ('fit') of maps or a container as a
+    section of kind ``of``; None for any other surface."""
+    if is_measured(spec):
+        return spec
+    if is_fitted(spec) and spec.get("of") in MEASURED_KINDS:
+        return dict(spec, kind=spec["of"])
+    return None
+
+
+def spectrum_source(spec) -> bool:
+    """Whether a surface's data is a PSD file (kind 'psd_file', or 'fit' of one)."""
+    return spec is not None and (spec.get("kind") == "psd_file" or (is_fitted(spec) and spec.get("of") == "psd_file"))
+
+
 #: the kinds of measured surface (height data the topography stage analyses)
 MEASURED_KINDS = ("topography", "container")
 #: the condition of :class:`~roughcontact.stage.Upstream` under which a stage needs the topography
 #: stage: a surface of a measured kind
 MEASURED_SURFACES = {f"{name}.kind": MEASURED_KINDS for name in SURFACES}
+#: the condition under which the psd stage needs the fit stage: a fitted surface
+FITTED_SURFACES = {f"{name}.kind": ("fit",) for name in SURFACES}
+#: the same for the stages that also analyse the maps of a fitted surface (kind 'fit' of maps or a container)
+MAPPED_SURFACES = {**MEASURED_SURFACES, **{f"{name}.of": MEASURED_KINDS for name in SURFACES}}
+
+
+#: the key holding the data of a fitted surface, by what it is fitted to (``of``)
+FIT_DATA = {"topography": "files", "container": "container", "psd_file": "path"}
 
 
 def _check_surface(values: dict, key: str) -> None:
+    if values.get("kind") == "fit":
+        data = FIT_DATA[values["of"]]
+        if values.get(data) is None:
+            raise UserError(f"a fit of {values['of']!r} data needs '{data}'", key=f"{key}.{data}")
+        others = [k for k in FIT_DATA.values() if k != data and values.get(k) is not None]
+        if others:
+            raise UserError(f"of = {values['of']!r} reads '{data}', not '{others[0]}'", key=f"{key}.{others[0]}")
+        if values.get("qL") is not None and values.get("q1") is not None and not values["qL"] < values["q1"]:
+            raise UserError(f"needs qL < q1, got qL={values['qL']:g}, q1={values['q1']:g} 1/m", key=key)
     if values.get("kind") == "self_affine":
         qL, q1 = values["qL"], values["q1"]
         q0 = values.get("q0") if values.get("q0") is not None else qL
@@ -158,6 +212,43 @@ MAP_KEYS = ("files", "height_unit", "size_x", "size_y", "periodic", "fill_undefi
 CONTAINER_KEYS = ("container", "surface", "fill_undefined", "detrend", "analysis", "window")
 
 
+def _optional(params, exclude=()):
+    """The parameters with no required one (a fitted surface gives the keys of one kind of data)."""
+    return tuple(dataclasses.replace(p, default=None) if p.default is REQUIRED else p
+                 for p in params if p.name not in exclude)
+
+
+FIT_PARAMS = (
+    Param("of", "choice", choices=("topography", "container", "psd_file"),
+          doc="the measured data fitted: height maps ('files' and the keys of kind topography), a "
+              "contact.engineering container ('container', ...) or a PSD file ('path', ...)"),
+    Param("qL", "quantity", "1/m", default=None, lo=0.0, lo_open=True,
+          doc="lowest wavenumber of the fitted spectrum (default: the fitted band's; lower extrapolates)"),
+    Param("q1", "quantity", "1/m", default=None, lo=0.0, lo_open=True,
+          doc="upper cut-off of the fitted spectrum (default: the fitted band's; higher extrapolates)"),
+    *_optional(TOPOGRAPHY_PARAMS, exclude=("extend",)),
+    *_optional([p for p in CONTAINER_PARAMS if p.name in ("container", "surface")]),
+    *_optional([p for p in PSD_FILE_PARAMS if p.name not in ("extend", "hurst")]),
+)
+#: the keys of a fitted surface (kind "fit") of a PSD file that reading the file takes
+SPECTRUM_KEYS = ("path", "columns", "q_unit", "C_unit", "convention", "hurst", "variable", "select")
+#: the keys of a fitted surface (kind "fit") that its measured data's analysis takes
+FIT_DATA_KEYS = ("of", *MAP_KEYS, "surface", *SPECTRUM_KEYS[1:])
+
+
+def spectrum_file(name: str) -> FileInput:
+    """The measured PSD of surface ``name`` (kind psd_file, or fit of one), read in SI by the
+    engine's spectrum reader."""
+
+    def options(params):
+        spec = params[name]
+        return dict(key=name, convention=spec["convention"], columns=spec["columns"], q_unit=spec["q_unit"],
+                    value_unit=spec["C_unit"], variable=spec["variable"], select=spec["select"],
+                    convention_units={k: unit for k, (unit, _) in CONVENTIONS.items()})
+
+    return FileInput(f"{name}.path", reader="spectrum", options=options)
+
+
 def surface_reads(by_kind: dict) -> tuple[ByKind, ...]:
     """A stage's ``reads`` of both surface sections: the same keys of each, per kind."""
     return tuple(ByKind(name, dict(by_kind)) for name in SURFACES)
@@ -170,7 +261,7 @@ def _surface_section(name: str, doc: str) -> Section:
         optional=True,
         discriminator="kind",
         variants={"self_affine": SELF_AFFINE_PARAMS, "psd_file": PSD_FILE_PARAMS, "topography": TOPOGRAPHY_PARAMS,
-                  "container": CONTAINER_PARAMS, "smooth": ()},
+                  "container": CONTAINER_PARAMS, "fit": FIT_PARAMS, "smooth": ()},
         check=_check_surface,
     )
 
