@@ -36,7 +36,7 @@ from roughcontact.stage import (
 
 from .figures.bem import figure_bem_comparison, figure_bem_reduced_pressure
 from .shared.maps import check_eta, map_band, map_surfaces, measured_maps, topography_files
-from .shared.material import E_STAR, MATERIAL_KEYS, e_star
+from .shared.material import COATING_KEYS, E_STAR, MATERIAL_KEYS, e_star, refuse_coating
 from .shared.surfaces import MAP_KEYS, surface_reads
 from .shared.variants import THEORY, VARIANT_KEYS, VARIANTS, theory_variants, variant_attrs
 
@@ -126,7 +126,8 @@ def single_surfaces(sizes) -> None:
 
 
 def check_bem(inp: StageInput) -> None:
-    """The optional dependency, and usable measured maps."""
+    """The optional dependency, usable measured maps, and no coating (Tamaas' kernel is the half-space's)."""
+    refuse_coating(inp, "the BEM (its surface kernel is the homogeneous half-space's)")
     solver()
     names = map_surfaces(inp)
     check_eta(inp, names)
@@ -403,7 +404,8 @@ register(
         # Synthesized surfaces come from the psd stage's spectra: of those sections, only the kind
         reads=(*MATERIAL_KEYS, "load.p", "interface.eta", *surface_reads({"topography": MAP_KEYS, "*": ()}),
                "bem.surfaces", "bem.grid", "bem.realizations", "bem.seed", "bem.pixels_per_wavelength",
-               "numerics.bem_tolerance", "numerics.bem_stress_bins", "numerics.sigma_width", *VARIANT_KEYS),
+               "numerics.bem_tolerance", "numerics.bem_stress_bins", "numerics.sigma_width", *VARIANT_KEYS,
+               *COATING_KEYS),
         files=(topography_files("substrate"), topography_files("solid")),
         outputs={
             "bem_contact_area_ratio": Var("1", "relative contact area A/A0, BEM",
