@@ -31,6 +31,7 @@ from roughcontact.stage import (
     register_params,
 )
 
+from .figures.coating import figure_coating_area, figure_coating_modulus
 from .figures.contact import figure_contact_area, figure_elastoplastic_area, figure_stress_distribution
 from .shared.grid import Q_REFERENCE
 from .shared.magnification import CORRECTION_KEYS, area_correction, zeta_shape, zeta_values
@@ -193,6 +194,10 @@ STAGE = register(
                    outputs=("stress_distribution",)),
             Figure("elastoplastic_area", "A_el/A0 and A_pl/A0 against p", ("contact",), figure_elastoplastic_area,
                    outputs=PLASTIC),
+            Figure("coating_modulus", "coated solid: E_eff(q) and sqrt(G) against q", ("psd", "contact"),
+                   figure_coating_modulus),
+            Figure("coating_area", "coated solid: A/A0 against p for each coating thickness", ("contact",),
+                   figure_coating_area),
         ),
         check=check_contact,
         describe=describe_contact,

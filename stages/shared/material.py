@@ -45,12 +45,13 @@ def coating_attrs(inp) -> dict:
     layer = coating_layer(inp)
     if layer is None:
         return {}
-    d, E, nu, *_ = layer
+    d, E, nu, E_sub, nu_sub = layer
     return {"coating": f"layer of thickness {d:.6g} m, E = {E:.6g} Pa, nu = {nu:.6g} on the elastic solid "
                        "(material.E, material.nu: its substrate; E_star is the substrate's); E_eff(q) of "
                        "physics/layered.py under the q integrals: G = (pi/4) int q^3 C E_eff^2 dq, eq 57 with "
                        "E_eff in the elastic energy (docs/coating.md)",
-            "coating_thickness_m": d, "coating_E_Pa": E, "coating_nu": nu}
+            "coating_thickness_m": d, "coating_E_Pa": E, "coating_nu": nu, "substrate_E_Pa": E_sub,
+            "substrate_nu": nu_sub}
 
 
 def refuse_coating(inp, what: str) -> None:
