@@ -159,3 +159,25 @@ def test_bad_coating_is_a_one_line_error_naming_the_key_before_anything_is_writt
     code, err = cli_error_line(capsys, "run", path, "--outdir", out, "--quiet")
     assert code == 2 and key in err and message in err, err
     assert not out.exists() or not any(out.rglob("*.nc"))
+
+
+def test_coating_figures_draw_each_thickness_and_nothing_for_a_homogeneous_solid(run_scene, tmp_path):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from roughcontact.stages.figures.coating import figure_coating_area, figure_coating_modulus
+
+    plain = run_scene(coated_scene(), outdir=tmp_path / "plain")
+    assert figure_coating_area(plain) is None and figure_coating_modulus(plain) is None
+    scene = coated_scene({"coating_thickness": "10 um", **POLYMER},
+                         variants={"thin": {"material": {"coating_thickness": "1 um"}},
+                                   "bare": {"material": {"coating_thickness": "none"}}})
+    res = run_scene(scene, outdir=tmp_path / "coated")
+    for make in (figure_coating_area, figure_coating_modulus):
+        fig = make(res)
+        labels = {line.get_label() for ax in fig.axes for line in ax.get_lines()}
+        assert {"coating d = 1 um", "coating d = 10 um"} <= labels
+        assert any(label.startswith("bare: no coating, E* = 230.8 GPa") for label in labels), labels
+        plt.close(fig)

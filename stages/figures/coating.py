@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from roughcontact.physics.layered import effective_modulus
+from roughcontact.physics.layered import modulus_weight
 from roughcontact.stage import readable
 
 from .common import legend_outside
@@ -77,12 +77,12 @@ def figure_coating_modulus(results):
         d, E_l, nu_l = float(a["coating_thickness_m"]), float(a["coating_E_Pa"]), float(a["coating_nu"])
         E_s = float(ds["E_star"])
         E_sub, nu_sub = float(a["substrate_E_Pa"]), float(a["substrate_nu"])
-        E = effective_modulus(q, d, E_l, nu_l, E_sub, nu_sub)
-        ax.plot(q, E / 1e9, label=label, **st)
-        ax.plot([1 / d], [float(effective_modulus(1 / d, d, E_l, nu_l, E_sub, nu_sub)) / 1e9], "o", color=st["color"],
-                ms=5, label="_")
+        layer = (d, E_l, nu_l, E_sub, nu_sub)
+        ax.plot(q, E_s * modulus_weight(q, layer) / 1e9, label=label, **st)  # E_eff = E*_s (E_eff / E*_s)
+        ax.plot([1 / d], [E_s * float(modulus_weight(1 / d, layer)) / 1e9], "o", color=st["color"], ms=5, label="_")
         levels[f"substrate E* = {readable(E_s, 'Pa')}"] = E_s
-        levels[f"coating E* = {readable(E_l / (1 - nu_l**2), 'Pa')}"] = E_l / (1 - nu_l**2)
+        E_top = E_s * float(modulus_weight(1e6 / d, layer))  # q d = 1e6: the coating's own E*
+        levels[f"coating E* = {readable(E_top, 'Pa')}"] = E_top
     for (text, E), ls in zip(levels.items(), (":", "-."), strict=False):
         ax.axhline(E / 1e9, color="0.4", lw=0.9, ls=ls)
         ax.annotate(text, (q[0], E / 1e9), xytext=(4, 3), textcoords="offset points", fontsize=8, color="0.3")
