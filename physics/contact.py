@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from .inputs import require_nonnegative, require_pressure
+from .layered import layered_spectrum
 from .quadrature import integral_to
 from .special import erf
 
@@ -39,8 +40,12 @@ def effective_modulus(E, nu):
     return E / (1.0 - nu * nu)
 
 
-def persson_G(q, C, q_upper, E_star):
+def persson_G(q, C, q_upper, E_star, layer=None):
     """G(zeta) = (pi/4) E*^2 \\int_{qL}^{zeta qL} q^3 C(q) dq  (Pa^2), seed eq 17 / eq 2.
+
+    A coated solid (``layer``) has E_eff(q) under the integral:
+    G = (pi/4) \\int q^3 C(q) E_eff(q)^2 dq, with E_star the substrate's E*
+    (:func:`roughcontact.physics.layered.layered_spectrum`).
 
     Parameters
     ----------
@@ -51,7 +56,11 @@ def persson_G(q, C, q_upper, E_star):
     q_upper : array (m,)
         Upper limits zeta qL (1/m), within the grid.
     E_star : float
-        Effective modulus (Pa).
+        Effective modulus (Pa); with a layer, the substrate's E_sub / (1 - nu_sub^2).
+    layer : tuple or None
+        (thickness in m, E_layer in Pa, nu_layer, E_sub in Pa, nu_sub) of a coating on the
+        elastic solid (:data:`roughcontact.physics.layered.LAYER_FIELDS`); None: a homogeneous
+        half-space.
 
     Returns
     -------
@@ -60,8 +69,11 @@ def persson_G(q, C, q_upper, E_star):
 
     References
     ----------
-    docs/theory.md, section "Contact"; Persson, J. Chem. Phys. 115, 3840 (2001).
+    docs/theory.md, sections "Contact" and "Coated (layered) solids"; Persson, J. Chem. Phys.
+    115, 3840 (2001); Persson, J. Phys.: Condens. Matter 24, 095008 (2012).
     """
+    if layer is not None:
+        C = layered_spectrum(q, C, layer)
     return (np.pi / 4.0) * E_star**2 * integral_to(q, np.asarray(q) ** 3 * C, q_upper)
 
 

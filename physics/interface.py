@@ -122,7 +122,7 @@ def contact_stiffness(p, D):
 
 
 def stiffness_from_psd(q, C, q_upper, p, *, E_star, alpha, refinement="none", panels_per_decade=2, order=3,
-                       depth=10.0):
+                       depth=10.0, layer=None):
     """-du/d(ln p) (m) and K = -dp/du (Pa/m) at every upper limit zeta qL, from the combined PSD.
 
     The nodes of eq 57 (:func:`roughcontact.physics.separation.separation_nodes`) are built for
@@ -141,8 +141,9 @@ def stiffness_from_psd(q, C, q_upper, p, *, E_star, alpha, refinement="none", pa
         Nominal pressure (Pa), > 0, broadcast against the leading dims of ``C``.
     E_star, alpha, refinement
         As in :func:`roughcontact.physics.separation.mean_separation`.
-    panels_per_decade, order, depth
-        As in :func:`roughcontact.physics.separation.separation_nodes`.
+    panels_per_decade, order, depth, layer
+        As in :func:`roughcontact.physics.separation.separation_nodes` (with a layer, E_star is
+        the substrate's E*).
 
     Returns
     -------
@@ -155,7 +156,7 @@ def stiffness_from_psd(q, C, q_upper, p, *, E_star, alpha, refinement="none", pa
     ----------
     docs/theory.md, section "Interface: stiffness, conductance, leakage" (seed eqs 57, 59).
     """
-    s, weight, count, _, s_tail, q_tail = separation_nodes(q, C, q_upper, panels_per_decade, order, depth)
+    s, weight, count, _, s_tail, q_tail = separation_nodes(q, C, q_upper, panels_per_decade, order, depth, layer)
     D = separation_log_slope(p, s, weight, count, s_tail, q_tail, E_star=E_star, alpha=alpha, refinement=refinement)
     return D, contact_stiffness(np.asarray(p, dtype=float)[..., None], D)
 

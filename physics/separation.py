@@ -29,6 +29,7 @@ import functools
 import numpy as np
 
 from .inputs import require_pressure
+from .layered import layered_spectrum, modulus_weight
 from .quadrature import cumulative_integral, gauss_legendre_panels, integral_to, inverse_cumulative_integral
 from .special import erf, erfcx, exp1, exp1_fast
 
@@ -203,7 +204,7 @@ def separation_node_count(q, q_upper, panels_per_decade=4, order=4, depth=10.0):
     return (n_breaks - 1) * int(order)
 
 
-def separation_nodes(q, C, q_upper, panels_per_decade=4, order=4, depth=10.0):
+def separation_nodes(q, C, q_upper, panels_per_decade=4, order=4, depth=10.0, layer=None):
     """Quadrature nodes in s = 1/w for eq 57 and its small-pressure moments (eqs 59-60).
 
     Panels on the s axis end at the images s(q_i) of the grid nodes, at s(q_upper) and on a
@@ -213,6 +214,14 @@ def separation_nodes(q, C, q_upper, panels_per_decade=4, order=4, depth=10.0):
     .. math:: q^2 C(q)\\, w(q)\\, dq = \\frac{2}{\\pi} \\frac{ds}{q(s)},
 
     q(s) the exact inverse of the power-law running integral of q^3 C.
+
+    A coated solid (``layer``) has E_eff(q) in the elastic energy: eq 57 becomes
+    u = (sqrt(pi) alpha / 2) \\int q^2 C E_eff w_l E1((w_l p)^2) dq with
+    w_l = (pi \\int q^3 C E_eff^2 dq)^(-1/2). With C -> C (E_eff/E*)^2 (E* the substrate's,
+    :func:`roughcontact.physics.layered.layered_spectrum`) s and the E1 argument are those above,
+    and each node's weight carries the factor E*/E_eff(q(s)); the tail's 1/q_tail does too
+    (``q_tail`` is returned times E_eff(q_tail)/E*). Every kernel that sums on these nodes
+    (u, u0, beta, the stiffness) then holds for the coated solid, with E* the substrate's.
 
     Parameters
     ----------
@@ -228,6 +237,9 @@ def separation_nodes(q, C, q_upper, panels_per_decade=4, order=4, depth=10.0):
         Gauss-Legendre nodes per panel.
     depth : float
         Decades of s resolved by panels below s_total (closed form below).
+    layer : tuple or None
+        (thickness in m, E_layer in Pa, nu_layer, E_sub in Pa, nu_sub) of a coating
+        (:data:`roughcontact.physics.layered.LAYER_FIELDS`); None: a homogeneous half-space.
 
     Returns
     -------
@@ -242,14 +254,17 @@ def separation_nodes(q, C, q_upper, panels_per_decade=4, order=4, depth=10.0):
     s_tail : array (..., m)
         min(s_b, s_upper): the tail [0, s_tail] is integrated with q = q_tail.
     q_tail : array (...)
-        q(s = 0) (1/m): the lowest wavenumber with roughness (qL).
+        q(s = 0) (1/m): the lowest wavenumber with roughness (qL); with a layer, times
+        E_eff/E* there.
 
     References
     ----------
-    docs/theory.md, section "Separation" (seed eqs 24, 54, 57).
+    docs/theory.md, sections "Separation" (seed eqs 24, 54, 57) and "Coated (layered) solids".
     """
     q = np.asarray(q, dtype=float)
     C = np.asarray(C, dtype=float)
+    if layer is not None:
+        C = layered_spectrum(q, C, layer)
     q_upper = np.atleast_1d(np.asarray(q_upper, dtype=float))
     y = q**3 * C
     s_nodes = inverse_w(q, C)
@@ -273,6 +288,9 @@ def separation_nodes(q, C, q_upper, panels_per_decade=4, order=4, depth=10.0):
     q_of_s = inverse_cumulative_integral(q, y, nodes * nodes / np.pi)
     weight = gl / q_of_s
     q_tail = inverse_cumulative_integral(q, y, np.zeros(C.shape[:-1] + (1,)))[..., 0]
+    if layer is not None:
+        weight = weight / modulus_weight(q_of_s, layer)
+        q_tail = q_tail * modulus_weight(q_tail, layer)
     s_tail = np.minimum(s_b, s_upper)
     return nodes, weight, count, s_upper, s_tail, q_tail
 

@@ -38,7 +38,7 @@ from roughcontact.stage import (
 )
 
 from .figures.adhesion import figure_one_surface, figure_two_surfaces
-from .shared.material import MATERIAL_KEYS, e_star
+from .shared.material import COATING_KEYS, MATERIAL_KEYS, e_star, refuse_coating
 
 # ----------------------------------------------------------------------------------------
 # Scene sections
@@ -182,7 +182,8 @@ def _models(spec):
 
 
 def check_adhesion(inp: StageInput) -> None:
-    """The binding energy is given, and the vanishing hrms is sought at zero load."""
+    """The binding energy is given, and the vanishing hrms is sought at zero load; no coating."""
+    refuse_coating(inp, "the adhesion stage")
     spec = inp["adhesion"]
     _binding_energy(spec, e_star(inp))
     if spec["vanishing_hrms"] and spec["sigma0"] != 0:
@@ -309,7 +310,7 @@ STAGE = register(
         check=check_adhesion,
         describe=describe_adhesion,
         needs=("psd",),
-        reads=(*MATERIAL_KEYS, "adhesion", "numerics.adhesion_points_per_decade",
+        reads=(*MATERIAL_KEYS, *COATING_KEYS, "adhesion", "numerics.adhesion_points_per_decade",
                 "numerics.adhesion_zeta_offset", "numerics.adhesion_K_min", "numerics.adhesion_tolerance"),
         outputs={
             "gamma_eff_macroscopic": Var("J/m^2", "effective interfacial energy gamma_eff(1)",

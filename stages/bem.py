@@ -38,7 +38,7 @@ from .figures.bem import figure_bem_comparison, figure_bem_reduced_pressure
 from .figures.bem_fields import field_figures
 from .shared.bem_fields import FIELD_KEYS, MAPS as FIELD_MAPS, PARAMS as FIELD_PARAMS, Fields, with_fields
 from .shared.maps import check_eta, map_band, map_surfaces, measured_maps, topography_files
-from .shared.material import E_STAR, MATERIAL_KEYS, e_star
+from .shared.material import COATING_KEYS, E_STAR, MATERIAL_KEYS, e_star, refuse_coating
 from .shared.surfaces import MAP_KEYS, surface_reads
 from .shared.variants import THEORY, VARIANT_KEYS, VARIANTS, theory_variants, variant_attrs
 
@@ -129,7 +129,8 @@ def single_surfaces(sizes) -> None:
 
 
 def check_bem(inp: StageInput) -> None:
-    """The optional dependency, and usable measured maps."""
+    """The optional dependency, usable measured maps, and no coating (Tamaas' kernel is the half-space's)."""
+    refuse_coating(inp, "the BEM (its surface kernel is the homogeneous half-space's)")
     solver()
     names = map_surfaces(inp)
     check_eta(inp, names)
@@ -416,7 +417,11 @@ register(
                *surface_reads({"topography": MAP_KEYS, "fit": ("height_unit", "fill_undefined"), "*": ()}),
                "bem.surfaces", "bem.grid", "bem.realizations", "bem.seed", "bem.pixels_per_wavelength",
                "numerics.bem_tolerance", "numerics.bem_stress_bins", "numerics.sigma_width", *VARIANT_KEYS,
+<<<<<<< HEAD
                *FIELD_KEYS),
+=======
+               *COATING_KEYS),
+>>>>>>> i28-layered
         files=(topography_files("substrate"), topography_files("solid")),
         outputs={
             "bem_contact_area_ratio": Var("1", "relative contact area A/A0, BEM",

@@ -15,7 +15,7 @@ from roughcontact.physics.interface import barber_conductance, barber_resistance
 from roughcontact.stage import Figure, Param, Section, Stage, StageInput, UserError, Var, register, register_section
 
 from .figures.interface import figure_conductance
-from .shared.material import MATERIAL_KEYS, e_star
+from .shared.material import COATING_KEYS, MATERIAL_KEYS, e_star, refuse_coating
 
 #: (scene key prefix, what it is, SI units) of the two transport properties
 PROPERTIES = {"thermal": ("thermal_conductivity", "thermal conductivity", "W/(m*K)"),
@@ -55,7 +55,9 @@ def _series(inp: StageInput, kind: str):
 
 
 def check_conductance(inp: StageInput) -> None:
-    """At least one of the two properties, for both bodies."""
+    """At least one of the two properties, for both bodies; no coating (Barber's analogy needs
+    homogeneous bodies)."""
+    refuse_coating(inp, "the conductance stage (Barber's analogy holds for homogeneous bodies)")
     if _series(inp, "thermal") is None and _series(inp, "electrical") is None:
         raise UserError("the conductance stage needs the thermal conductivities or the electrical resistivities of "
                         "both bodies (e.g. thermal_conductivity_substrate = \"50 W/(m*K)\")", key="conductance")
@@ -94,7 +96,7 @@ register(
         compute=compute_conductance,
         check=check_conductance,
         needs=("stiffness",),
-        reads=(*MATERIAL_KEYS, "load.p", *KEYS),
+        reads=(*MATERIAL_KEYS, *COATING_KEYS, "load.p", *KEYS),
         outputs={
             "thermal_contact_conductance": Var("W/(m^2*K)", "thermal contact conductance h",
                                                attrs={"comment": "per unit nominal area, h = 2 K / (E* (1/kappa1 + "

@@ -31,10 +31,11 @@ from roughcontact.stage import (
     register_params,
 )
 
+from .figures.coating import figure_coating_area, figure_coating_modulus
 from .figures.contact import figure_contact_area, figure_elastoplastic_area, figure_stress_distribution
 from .shared.grid import Q_REFERENCE
 from .shared.magnification import CORRECTION_KEYS, area_correction, zeta_shape, zeta_values
-from .shared.material import E_STAR, MATERIAL_KEYS, e_star
+from .shared.material import COATING_KEYS, E_STAR, MATERIAL_KEYS, coating_attrs, coating_layer, e_star
 
 register_params(
     "numerics",
@@ -51,7 +52,7 @@ def compute_contact(inp: StageInput) -> xr.Dataset:
     E_star = e_star(inp)
     zeta = xr.DataArray(zeta_values(inp, q), dims=("zeta",))
     G = xr.apply_ufunc(
-        persson_G, psd["q"], psd["psd_combined"], zeta * q[0], E_star,
+        persson_G, psd["q"], psd["psd_combined"], zeta * q[0], E_star, kwargs={"layer": coating_layer(inp)},
         input_core_dims=[["q"], ["q"], ["zeta"], []], output_core_dims=[["zeta"]],
         dask="parallelized", output_dtypes=[float],
     ).assign_coords(zeta=zeta)
@@ -59,7 +60,8 @@ def compute_contact(inp: StageInput) -> xr.Dataset:
     G_area = _corrected(inp, p, G)
     area = xr.apply_ufunc(contact_area_ratio, p, G_area, dask="parallelized", output_dtypes=[float])
     area.attrs = _correction_attrs(inp)
-    ds = xr.Dataset({"G": G, "contact_area_ratio": area, "E_star": xr.DataArray(E_star), "qL": xr.DataArray(q[0])})
+    ds = xr.Dataset({"G": G, "contact_area_ratio": area, "E_star": xr.DataArray(E_star), "qL": xr.DataArray(q[0])},
+                    attrs=coating_attrs(inp))
     if "stress_distribution" in inp.wanted:
         level = xr.DataArray(np.linspace(0.0, 1.0, inp["numerics.sigma_points"]), dims=("stress_level",))
         dist, sigma, mass = xr.apply_ufunc(
@@ -151,7 +153,7 @@ STAGE = register(
         version="3",  # contact.yield_stress (default none) adds optional outputs only
         compute=compute_contact,
         needs=("psd",),
-        reads=(*MATERIAL_KEYS, "load.p", "contact.zeta", "numerics.sigma_points", "numerics.sigma_width",
+        reads=(*MATERIAL_KEYS, *COATING_KEYS, "load.p", "contact.zeta", "numerics.sigma_points", "numerics.sigma_width",
                 *CORRECTION_KEYS, "contact.yield_stress"),
         outputs={
             "G": Var("Pa^2", "Persson's G(zeta)",
@@ -192,6 +194,10 @@ STAGE = register(
                    outputs=("stress_distribution",)),
             Figure("elastoplastic_area", "A_el/A0 and A_pl/A0 against p", ("contact",), figure_elastoplastic_area,
                    outputs=PLASTIC),
+            Figure("coating_modulus", "coated solid: E_eff(q) and sqrt(G) against q", ("psd", "contact"),
+                   figure_coating_modulus),
+            Figure("coating_area", "coated solid: A/A0 against p for each coating thickness", ("contact",),
+                   figure_coating_area),
         ),
         check=check_contact,
         describe=describe_contact,

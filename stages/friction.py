@@ -50,6 +50,7 @@ from .shared.flash import (
     temperature_law,
 )
 from .shared.magnification import CORRECTION_KEYS, area_correction
+from .shared.material import COATING_KEYS, refuse_coating
 
 # ----------------------------------------------------------------------------------------
 # Scene section and numerics
@@ -110,7 +111,9 @@ def _shear_law(inp):
 
 
 def _check(inp):
-    """Cross-key errors of the flash temperature and of the contact shear term."""
+    """Cross-key errors of the flash temperature and of the contact shear term; no coating."""
+    refuse_coating(inp, "the friction stage (a viscoelastic layer's E(omega) under the q integral of eq 61 is "
+                        "not implemented)")
     check_flash(inp)
     _shear_law(inp)
 
@@ -266,7 +269,8 @@ STAGE = register(
         needs=("modulus", "psd"),
         check=_check,
         reads=(*CORRECTION_KEYS, "load.p", "material.nu", "friction.v", "friction.correction", "friction.gamma",
-                "numerics.friction_phi_nodes", "numerics.friction_segment_nodes") + FLASH_KEYS + SHEAR_KEYS,
+                "numerics.friction_phi_nodes", "numerics.friction_segment_nodes") + FLASH_KEYS + SHEAR_KEYS
+              + COATING_KEYS,
         outputs={
             "friction_coefficient": Var("1", "friction coefficient mu", tolerance=1e-4,
                                         attrs={"comment": "eq 61, plus the contact shear term with friction.shear"}),

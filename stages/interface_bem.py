@@ -29,7 +29,7 @@ from .leakage import NUMERICS as LEAKAGE_NUMERICS, SEAL_KEYS, leakage_settings, 
 from .separation import check_separation
 from .shared.bem_fields import FIELD_KEYS, MAPS as FIELD_MAPS, Fields, with_fields
 from .shared.maps import check_eta, map_surfaces, topography_files
-from .shared.material import E_STAR, MATERIAL_KEYS, e_star
+from .shared.material import COATING_KEYS, E_STAR, MATERIAL_KEYS, e_star
 from .stiffness import SEPARATION_KEYS, separation_settings
 
 register_params(
@@ -210,7 +210,8 @@ STAGE = register(
         describe=describe_interface_bem,
         needs=("psd",),
         reads=(*MATERIAL_KEYS, "load.p", *BEM_KEYS, *SEPARATION_KEYS, *SEAL_KEYS, "leakage.percolation_area",
-                *LEAKAGE_NUMERICS, "numerics.interface_bem_step", "numerics.interface_bem_bisections"),
+                *LEAKAGE_NUMERICS, "numerics.interface_bem_step", "numerics.interface_bem_bisections",
+                *COATING_KEYS),
         files=(topography_files("substrate"), topography_files("solid")),
         outputs={
             "exact_contact_area_ratio": Var("1", "BEM relative contact area at p, per realization"),

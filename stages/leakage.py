@@ -29,7 +29,7 @@ from roughcontact.stage import (
 from .figures.interface import figure_leakage
 from .separation import check_separation, theory_attrs
 from .shared.magnification import area_correction
-from .shared.material import MATERIAL_KEYS, e_star
+from .shared.material import COATING_KEYS, MATERIAL_KEYS, e_star, refuse_coating
 from .stiffness import SEPARATION_KEYS, separation_settings
 
 register_section(
@@ -95,6 +95,12 @@ def seal_parameters(inp: StageInput) -> tuple[float, float, float, float]:
                                          "leakage.seal_length"))
 
 
+def check_leakage(inp: StageInput) -> None:
+    """The separation law's checks, and no coating (the seal theories take a homogeneous solid)."""
+    check_separation(inp)
+    refuse_coating(inp, "the leakage stage")
+
+
 def compute_leakage(inp: StageInput) -> xr.Dataset:
     psd = inp.upstream["psd"]
     q, C = psd["q"], psd["psd_combined"]
@@ -138,9 +144,10 @@ register(
         name="leakage",
         version="2",
         compute=compute_leakage,
-        check=check_separation,
+        check=check_leakage,
         needs=("psd",),
-        reads=(*MATERIAL_KEYS, "load.p", *SEPARATION_KEYS, *SEAL_KEYS, "leakage.percolation_area", *NUMERICS),
+        reads=(*MATERIAL_KEYS, "load.p", *SEPARATION_KEYS, *SEAL_KEYS, "leakage.percolation_area", *NUMERICS,
+               *COATING_KEYS),
         outputs={
             "leak_rate_critical_junction": Var("m^3/s", "leak rate, critical-junction theory", tolerance=1e-4,
                                                attrs={"formula": FLOW + "u1^3",

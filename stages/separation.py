@@ -40,7 +40,7 @@ from roughcontact.stage import (
 from .figures.separation import figure_separation
 from .shared.grid import Q_REFERENCE
 from .shared.magnification import CORRECTION_KEYS, area_correction, zeta_shape, zeta_values
-from .shared.material import E_STAR, MATERIAL_KEYS, e_star
+from .shared.material import COATING_KEYS, E_STAR, MATERIAL_KEYS, coating_attrs, coating_layer, e_star
 
 register_section(
     Section(
@@ -133,7 +133,7 @@ def compute_separation(inp: StageInput) -> xr.Dataset:
     numerics = {"panels_per_decade": inp["numerics.separation_panels_per_decade"],
                 "order": inp["numerics.separation_gauss_points"], "depth": float(inp["numerics.separation_depth"])}
     s, weight, count, s_upper, s_tail, q_tail = xr.apply_ufunc(
-        separation_nodes, psd["q"], psd["psd_combined"], zetas * q[0], kwargs=numerics,
+        separation_nodes, psd["q"], psd["psd_combined"], zetas * q[0], kwargs={**numerics, "layer": coating_layer(inp)},
         input_core_dims=[["q"], ["q"], ["zeta"]],
         output_core_dims=[[_NODES], [_NODES], ["zeta"], ["zeta"], ["zeta"], []],
         dask="parallelized", output_dtypes=[float, float, int, float, float, float],
@@ -173,7 +173,8 @@ def compute_separation(inp: StageInput) -> xr.Dataset:
     beta.attrs = _beta_attrs(refinement)
     ds = xr.Dataset({"mean_separation": u, "separation_u0": u0, "separation_beta": beta,
                      "E_star": xr.DataArray(E_star), "qL": xr.DataArray(q[0])})
-    ds.attrs.update({**theory_attrs(inp, {"alpha": alpha, "refinement": refinement}), "separation_epsilon": EPSILON})
+    ds.attrs.update({**theory_attrs(inp, {"alpha": alpha, "refinement": refinement}), "separation_epsilon": EPSILON,
+                     **coating_attrs(inp)})
     return ds
 
 
@@ -203,7 +204,7 @@ STAGE = register(
         describe=describe_separation,
         needs=("psd",),
         reads=(*MATERIAL_KEYS, "load.p", "contact.zeta", "separation.alpha", "separation.refinement", *_NUMERICS,
-                *CORRECTION_KEYS),
+                *CORRECTION_KEYS, *COATING_KEYS),
         outputs={
             "mean_separation": Var("m", "mean interfacial separation u", attrs={"comment": "u(p), eq 57"},
                                    tolerance=1e-4),

@@ -19,7 +19,7 @@ from roughcontact.stage import Figure, Shape, Stage, StageInput, Var, register
 from .figures.interface import figure_stiffness
 from .separation import check_separation, separation_variant, theory_attrs
 from .shared.magnification import CORRECTION_KEYS, zeta_values
-from .shared.material import E_STAR, MATERIAL_KEYS, e_star
+from .shared.material import COATING_KEYS, E_STAR, MATERIAL_KEYS, coating_attrs, coating_layer, e_star
 
 #: the scene keys of eq 57 and its quadrature (declared by the separation stage); refinement
 #: "contact" takes the variant (and its gamma as alpha) from contact.correction
@@ -45,7 +45,7 @@ def compute_stiffness(inp: StageInput) -> xr.Dataset:
     p = inp.sweep("p", inp["load.p"])
     D, K = xr.apply_ufunc(
         stiffness_from_psd, psd["q"], psd["psd_combined"], zetas * q[0], p,
-        kwargs={"E_star": E_star, **settings},
+        kwargs={"E_star": E_star, **settings, "layer": coating_layer(inp)},
         input_core_dims=[["q"], ["q"], ["zeta"], []], output_core_dims=[["zeta"], ["zeta"]],
         dask="parallelized", output_dtypes=[float, float],
         dask_gufunc_kwargs={"output_sizes": {"zeta": zetas.size}},
@@ -57,7 +57,7 @@ def compute_stiffness(inp: StageInput) -> xr.Dataset:
     K.attrs = {"formula": "K = p / D, D = -du/dln p = sqrt(pi) alpha int q^2 C w exp(-(w p/E*)^2) dq",
                "alpha": settings["alpha"], "refinement": settings["refinement"],
                "refinement_description": REFINEMENTS[settings["refinement"]]}
-    ds_attrs = theory_attrs(inp, settings)
+    ds_attrs = {**theory_attrs(inp, settings), **coating_attrs(inp)}
     D.attrs = {"formula": "D = -p du/dp = (2 alpha/sqrt(pi)) int_0^(1/w) exp(-(p/(E* s))^2) ds/q(s) "
                           "(+ tail in closed form)"}
     u0 = inp.upstream["separation"]["separation_u0"]
@@ -89,7 +89,7 @@ register(
         compute=compute_stiffness,
         check=check_separation,
         needs=("psd", "separation"),
-        reads=(*MATERIAL_KEYS, "load.p", "contact.zeta", *SEPARATION_KEYS),
+        reads=(*MATERIAL_KEYS, *COATING_KEYS, "load.p", "contact.zeta", *SEPARATION_KEYS),
         outputs={
             "contact_stiffness": Var("Pa/m", "normal contact stiffness K = -dp/du",
                                      attrs={"comment": f"per unit nominal area; {INFINITE}"}, tolerance=1e-4),

@@ -32,7 +32,7 @@ from roughcontact.stage import (
 
 from .bem import solver
 from .figures.validation import figure_kappa, figure_separation_ratio
-from .shared.material import MATERIAL_KEYS
+from .shared.material import COATING_KEYS, MATERIAL_KEYS, refuse_coating
 from .shared.validation_table import OUTPUTS as TABLE_OUTPUTS, TABLE_COORDS, case_kwargs, compute_table
 from .shared.variants import VARIANT_KEYS
 
@@ -69,7 +69,7 @@ register_section(
     )
 )
 
-BEM_KEYS = (*MATERIAL_KEYS, "interface.eta", "numerics.bem_tolerance", "numerics.points_per_decade",
+BEM_KEYS = (*MATERIAL_KEYS, *COATING_KEYS, "interface.eta", "numerics.bem_tolerance", "numerics.points_per_decade",
             *(f"validation.{k}" for k in ("hurst", "bandwidth", "reduced_pressure", "pixels_per_wavelength", "max_grid",
                                           "realizations", "seed", "qL", "rolloff_substrate", "rolloff_solid",
                                           "hrms_substrate", "hrms_solid", "lattice")))
@@ -77,7 +77,8 @@ BEM_KEYS = (*MATERIAL_KEYS, "interface.eta", "numerics.bem_tolerance", "numerics
 
 def check_validation_bem(inp: StageInput) -> None:
     """The optional dependency (tamaas), and a BEM grid for every bandwidth: a bandwidth whose
-    coarsest rung exceeds max_grid would have no task solved (and the table nothing to compare)."""
+    coarsest rung exceeds max_grid would have no task solved (and the table nothing to compare); no coating."""
+    refuse_coating(inp, "the validation stages (their BEM kernel is the homogeneous half-space's)")
     solver()
     coarsest = float(np.min(inp["validation.pixels_per_wavelength"]))
     for bandwidth in np.atleast_1d(inp["validation.bandwidth"]):

@@ -12,7 +12,7 @@ draws it; the checks read the matplotlib objects:
   written (as ``roughcontact plot`` writes it) read back through matplotlib is not one colour.
 
 Every built-in scene is covered (a test says so): the CI runs a representative subset (the
-default, friction, topography, seal and elastoplastic scenes; large_sweep and interface_bem at reduced sizes);
+default, friction, topography, seal, elastoplastic and coating scenes; large_sweep and interface_bem at reduced sizes);
 the others, and large_sweep and interface_bem at their full sizes, are marked slow.
 """
 
@@ -34,7 +34,7 @@ from roughcontact import engine, scene as scenes, store  # noqa: E402
 from roughcontact.cli import main, scene_figures  # noqa: E402
 from roughcontact.stages.figures.common import CASE_STYLES, at_zeta, case_of, nominal, reduce_dims  # noqa: E402
 
-FAST = ["default", "friction", "topography", "seal", "elastoplastic", "fit"]
+FAST = ["default", "friction", "topography", "seal", "elastoplastic", "fit", "coating"]
 SLOW = ["separation", "adhesion", "bem", "bem_topography", "large_sweep", "container", "dma_flash", "validation",
         "interface_bem"]
 #: scenes the CI runs at reduced sizes (their full runs are in SLOW): dotted key -> value
@@ -262,6 +262,8 @@ def test_plot_draws_the_interface_figures_and_announces_no_skipped_figure(tmp_pa
     results = engine.run(sc, out, report=engine.Reporter(None))
     for f in scene_figures(sc)[0]:
         fig = f.make(results)
+        if fig is None:  # nothing to draw for this scene (the coating figures of a homogeneous solid)
+            continue
         labels = [line.get_label() for ax in fig.axes for line in ax.get_lines()]
         assert not any(label.startswith("pair") for label in labels), (f.name, labels)
         assert any(label.startswith("substrate only") for label in labels), (f.name, labels)
