@@ -417,11 +417,7 @@ register(
                *surface_reads({"topography": MAP_KEYS, "fit": ("height_unit", "fill_undefined"), "*": ()}),
                "bem.surfaces", "bem.grid", "bem.realizations", "bem.seed", "bem.pixels_per_wavelength",
                "numerics.bem_tolerance", "numerics.bem_stress_bins", "numerics.sigma_width", *VARIANT_KEYS,
-<<<<<<< HEAD
-               *FIELD_KEYS),
-=======
-               *COATING_KEYS),
->>>>>>> i28-layered
+               *FIELD_KEYS, *COATING_KEYS),
         files=(topography_files("substrate"), topography_files("solid")),
         outputs={
             "bem_contact_area_ratio": Var("1", "relative contact area A/A0, BEM",

@@ -139,3 +139,17 @@ def test_the_graph_sees_deferred_and_relative_imports():
 def test_no_import_cycles_among_our_modules():
     found = cycles(import_graph())
     assert not found, "import cycles (a deferred import is still one):\n" + "\n".join(found)
+
+
+def test_every_package_folder_is_listed_for_the_build():
+    """A folder of modules missing from ``[tool.setuptools] packages`` still installs from a git
+    clone (setuptools-scm's file finder carries it along as data) but not from a tarball, where the
+    import then fails: every folder with an ``__init__.py`` must be listed."""
+    setuptools = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
+    listed = set(setuptools["packages"])
+    for package, folder in setuptools["package-dir"].items():
+        for init in (ROOT / folder).rglob("__init__.py"):
+            parts = init.parent.relative_to(ROOT / folder).parts
+            if ".venv" in parts or "__pycache__" in parts:
+                continue
+            assert ".".join((package, *parts)) in listed, f"{init.parent} is not in pyproject's packages"
