@@ -236,3 +236,72 @@ def solve(heights, pixel_size, compliance, mean_pressure, *, pressure_cap=None, 
             "area": np.count_nonzero(p > 0) / p.size,
             "plastic_area": 0.0 if cap is None else np.count_nonzero(p >= cap) / p.size,
             "iterations": iterations, "error": float(error)}
+
+
+def saturated_areas(heights, pixel_size, E_star, pressures, sigma_Y, *, compliance=None, tolerance=1e-10,
+                    progress=None):
+    """Elastic and plastic contact area of a rough surface on an elastic-perfectly-plastic
+    surface layer (Kato's saturated contact: local pressure bounded by the penetration hardness
+    sigma_Y), at several nominal pressures: :func:`solve` with ``pressure_cap = sigma_Y``.
+
+    Solved in reduced units (lengths in pixels, stresses in E*: exact for linear elasticity),
+    increasing pressures warm-started from the previous solution. A pressure p >= sigma_Y cannot
+    be carried (sigma_Y A0 < p A0): the whole map is at the cap there, A_pl/A0 = 1, A_el/A0 = 0
+    (the convention of :func:`roughcontact.physics.plasticity.plastic_area_ratio`).
+
+    Parameters
+    ----------
+    heights : array (nx, ny)
+        Composite heights of the rigid surface (m), e.g. h1 - h2 of a pair.
+    pixel_size : float
+        dx (m).
+    E_star : float
+        Effective modulus (Pa) of the half-space; with ``compliance`` only the stress unit.
+    pressures : array (np,)
+        Nominal pressures (Pa), > 0.
+    sigma_Y : float
+        Penetration hardness (Pa), > 0.
+    compliance : callable, optional
+        Compliance of |q| (m/Pa) instead of the half-space's 2 / (q E*).
+    tolerance : float
+        Relative error of :func:`solve`.
+    progress : callable, optional
+        ``progress(1)`` after each pressure.
+
+    Returns
+    -------
+    dict of arrays (np,): ``elastic_area`` (fraction of pixels with 0 < p < sigma_Y),
+    ``plastic_area`` (fraction at sigma_Y), ``area`` (their sum).
+
+    References
+    ----------
+    Polonsky & Keer, Wear 231, 206 (1999); Almqvist et al., Tribol. Int. 40, 574 (2007);
+    docs/bem.md, section "Elastoplastic contact".
+    """
+    pressures = np.atleast_1d(np.asarray(pressures, dtype=float))
+    sigma_Y, E_star = float(sigma_Y), float(E_star)
+    if not sigma_Y > 0 or np.any(~(pressures > 0)):
+        raise ValueError("sigma_Y and the pressures must be > 0")
+    h = np.asarray(heights, dtype=float)
+    surface = (h - h.mean()) / pixel_size
+    kernel = half_space_compliance(1.0) if compliance is None else (lambda q: compliance(q / pixel_size)
+                                                                     * E_star / pixel_size)
+    out = {k: np.zeros(pressures.size) for k in ("elastic_area", "plastic_area", "area")}
+    order = np.argsort(pressures)
+    previous = None
+    for i in order:
+        p = pressures[i]
+        if p >= sigma_Y:
+            out["plastic_area"][i] = out["area"][i] = 1.0
+        elif np.ptp(surface) == 0.0:  # flat: uniform pressure p < sigma_Y, all elastic
+            out["elastic_area"][i] = out["area"][i] = 1.0
+        else:
+            res = solve(surface, 1.0, kernel, p / E_star, pressure_cap=sigma_Y / E_star, tolerance=tolerance,
+                        initial=previous)
+            previous = res["pressure"]
+            out["plastic_area"][i] = res["plastic_area"]
+            out["area"][i] = res["area"]
+            out["elastic_area"][i] = res["area"] - res["plastic_area"]
+        if progress is not None:
+            progress(1)
+    return out
