@@ -160,9 +160,10 @@ def figure_bem_reduced_pressure(results):
 
 def figure_bem_elastoplastic(results):
     """Elastoplastic contact, theory (lines) against the saturated BEM (markers, +- one standard
-    deviation over realizations) at the BEM's magnification: A_el/A0 (solid, circles) and
-    A_pl/A0 (dashed, squares) against p / sigma_Y, with the limit p / sigma_Y of a fully yielded
-    interface; beside them the theory / BEM ratios of A_el, A_pl and the total A_el + A_pl."""
+    deviation over realizations) at the BEM's magnification: A_el/A0 (solid, open markers) and
+    A_pl/A0 (dashed, filled markers; the case's marker and colour) against p / sigma_Y, with the
+    limit p / sigma_Y of a fully yielded interface; beside them the theory / BEM ratios of A_el,
+    A_pl and the total A_el + A_pl."""
     import matplotlib.pyplot as plt
 
     raw = results["base"]["bem"]
@@ -172,33 +173,35 @@ def figure_bem_elastoplastic(results):
     fig, axes = plt.subplots(1, 2, figsize=(11.5, 4.9), layout="constrained")
     x = ds["p"].values / Y
     cases = []
-    kinds = (("elastic", "-", "o"), ("plastic", "--", "s"))
+    kinds = (("elastic", "-", "white"), ("plastic", "--", None))  # line style, marker face (None: filled)
     for k, eta in enumerate(ds["eta"].values):
         d = ds.isel(eta=k)
         case, text = _label(d, eta, measured)
         s = style(case)
         cases.append(text)
         totals = {"theory": 0.0, "bem": 0.0}
-        for kind, line, marker in kinds:
+        for kind, line, face in kinds:
+            marker = dict(marker=s["marker"], color=s["color"], markerfacecolor=face or s["color"])
             theory = d[f"theory_{kind}_contact_area_ratio"].values
             mean, std = d[f"bem_{kind}_contact_area_ratio_mean"].values, d[f"bem_{kind}_contact_area_ratio_std"].values
             axes[0].loglog(x, np.where(theory > 0, theory, np.nan), line, color=s["color"],
                            label=f"theory A_{kind[:2]}/A0, {text}")
-            axes[0].errorbar(x, mean, yerr=std, fmt=marker, color=s["color"], markerfacecolor="white", markersize=5,
-                             capsize=2, label=f"BEM A_{kind[:2]}/A0, {text}")
+            axes[0].errorbar(x, mean, yerr=std, linestyle="none", markersize=5, capsize=2,
+                             label=f"BEM A_{kind[:2]}/A0, {text}", **marker)
             totals["theory"] = totals["theory"] + theory
             totals["bem"] = totals["bem"] + mean
             with np.errstate(divide="ignore", invalid="ignore"):
-                axes[1].loglog(x, np.where(mean > 0, theory / mean, np.nan), line, marker=marker, color=s["color"],
-                               markerfacecolor="white", markersize=4, label=f"A_{kind[:2]}: theory / BEM, {text}")
+                axes[1].loglog(x, np.where(mean > 0, theory / mean, np.nan), line, markersize=4,
+                               label=f"A_{kind[:2]}: theory / BEM, {text}", **marker)
         with np.errstate(divide="ignore", invalid="ignore"):
-            axes[1].loglog(x, totals["theory"] / totals["bem"], ":", marker="^", color=s["color"], markersize=4,
+            axes[1].loglog(x, totals["theory"] / totals["bem"], ":", marker=s["marker"], color=s["color"], markersize=4,
+                           markerfacecolor="white", markeredgecolor="0.5",
                            label=f"A_el + A_pl: theory / BEM, {text}")
     axes[0].loglog(x, np.minimum(x, 1.0), "-.", color="0.45", lw=1.0, label="p / sigma_Y (every spot yielded)")
     axes[0].axvline(1.0, color="0.6", lw=0.8)
     axes[0].set_ylim(max(1e-9, axes[0].get_ylim()[0]), 2.0)
     axes[0].set_ylabel("relative contact area")
-    axes[0].set_title("elastic (solid, circles) and plastic (dashed, squares) area", fontsize=9)
+    axes[0].set_title("elastic (solid line, open markers) and plastic (dashed, filled) area", fontsize=9)
     axes[1].axhline(1.0, color="0.5", lw=0.8)
     axes[1].set_ylabel("theory / BEM")
     axes[1].set_title("theory / BEM (p >= sigma_Y: both fully plastic)", fontsize=9)
