@@ -26,13 +26,16 @@ Algorithm (Polonsky & Keer, Wear 231, 206 (1999), load-controlled form):
 5. p <- p - tau t; negative pressures set to 0; points out of contact that overlap
    (p = 0, g < 0) enter the contact with p = -tau g, and the conjugacy restarts (delta = 0);
 6. p scaled to the mean p0; repeat from 2 until the error
-   sum |p g| / (sum p rms(h)) (complementarity, relative) is below the tolerance.
+   sum |p g| / (sum p rms(h)) (complementarity, relative; overlaps outside the contact count
+   too) and the load error |mean p / p0 - 1| are below the tolerance.
 
 Saturated (Kato) variant, ``pressure_cap`` = sigma_Y: the pressure is also bounded above,
 0 <= p <= sigma_Y; where p = sigma_Y the surfaces may interpenetrate (g <= 0: the solid has
 flowed plastically). The free set is then {0 < p < sigma_Y}; step 5 also clips p at sigma_Y
 and releases capped points whose gap opens (g > 0) to p = sigma_Y - tau g; step 6 finds the
-scale c with mean min(c p, sigma_Y) = p0 (exact, piecewise linear in c). The error then
+scale of the points below the cap that restores p0 (those it lifts above the cap are clipped).
+If every loaded point is capped and they cannot carry p0, the approach grows until the next
+point touches, which enters the contact. The error then
 measures sum |(p - cap) g| over the capped points as well. This is the bound-constrained
 form of the same quadratic programme (as solved by Tamaas' ``KatoSaturated``; Almqvist et al.,
 Tribol. Int. 40, 574 (2007)).
@@ -204,11 +207,15 @@ def solve(heights, pixel_size, compliance, mean_pressure, *, pressure_cap=None, 
         g = apply(p) - h
         free = (p > 0) if cap is None else (p > 0) & (p < cap)
         capped = np.zeros(shape, bool) if cap is None else p >= cap
+        touch = np.zeros(shape, bool)
         if not free.any():  # every loaded point capped: the gap on the loaded set fixes the approach
             g -= g[p > 0].max()
+            if p.mean() < p0 and (p == 0).any():  # the capped points cannot carry p0: approach until
+                g -= max(float(g[p == 0].min()), 0.0)  # the next point touches, and let it in
+                touch = (p == 0) & (g <= 0)
         else:
             g -= g[free].mean()
-        error = _error(p, g, p0, cap, free, capped, scale)
+        error = max(_error(p, g, p0, cap, free, capped, scale), abs(p.mean() / p0 - 1.0))
         if error < tolerance:
             break
         G = float(np.sum(g[free] ** 2))
@@ -221,7 +228,7 @@ def solve(heights, pixel_size, compliance, mean_pressure, *, pressure_cap=None, 
         tau = float(np.sum(g[free] * t[free])) / denom if denom > 0 else 0.0
         p = np.where(free, p - tau * t, p)
         p = np.maximum(p, 0.0)
-        enter = (p == 0) & (g < 0)  # overlapping points out of contact
+        enter = ((p == 0) & (g < 0)) | touch  # overlapping points out of contact
         leave = capped & (g > 0) if cap is not None else np.zeros(shape, bool)  # capped points opening
         p[enter] = -tau * g[enter] if tau > 0 else p0
         if cap is not None:

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 from reference_solutions import westergaard_contact_fraction, westergaard_full_contact_pressure
 
-from roughcontact.physics.bem_cg import compliance_grid, half_space_compliance, solve, wavenumbers
+from roughcontact.physics.bem_cg import compliance_grid, half_space_compliance, saturated_areas, solve, wavenumbers
 from roughcontact.physics.spectra import self_affine_psd
 from roughcontact.physics.synthesis import synthesize_pair
 
@@ -204,3 +204,19 @@ def test_saturated_same_as_tamaas_kato(p):
     assert np.linalg.norm(res["pressure"] - ref) / np.linalg.norm(ref) < 1e-8
     assert res["area"] == np.count_nonzero(ref > 0) / ref.size
     assert res["plastic_area"] == np.count_nonzero(ref >= Y * (1 - 1e-12)) / ref.size
+
+
+def test_saturated_areas_in_si_units_and_with_a_kernel():
+    """saturated_areas (what the bem stage calls): SI heights and pressures, reduced internally;
+    the half-space kernel given explicitly (converted to reduced units) gives the same areas; at
+    p >= sigma_Y the map is all plastic; elastic + plastic = the contact fraction."""
+    n, dx, E, Y = 64, 1e-6, 1e11, 1e9
+    h = rough_map(n, seed=4) * dx * 0.3
+    p = np.array([1e6, 3e7, 3e8, 2e9])
+    default = saturated_areas(h, dx, E, p, Y, tolerance=1e-12)
+    explicit = saturated_areas(h, dx, E, p, Y, compliance=half_space_compliance(E), tolerance=1e-12)
+    for key in ("elastic_area", "plastic_area", "area"):
+        np.testing.assert_allclose(explicit[key], default[key], rtol=0, atol=1.0 / h.size)
+    np.testing.assert_array_equal(default["elastic_area"] + default["plastic_area"], default["area"])
+    assert default["plastic_area"][-1] == 1.0 and default["elastic_area"][-1] == 0.0
+    assert np.all(np.diff(default["plastic_area"]) > 0) and np.all(default["plastic_area"][:-1] * Y <= p[:-1])
