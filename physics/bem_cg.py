@@ -35,9 +35,9 @@ flowed plastically). The free set is then {0 < p < sigma_Y}; step 5 also clips p
 and releases capped points whose gap opens (g > 0) to p = sigma_Y - tau g; step 6 finds the
 scale of the points below the cap that restores p0 (those it lifts above the cap are clipped).
 If every loaded point is capped and they cannot carry p0, the approach grows until the next
-point touches, which enters the contact. The error then
-measures sum |(p - cap) g| over the capped points as well. This is the bound-constrained
-form of the same quadratic programme (as solved by Tamaas' ``KatoSaturated``; Almqvist et al.,
+point touches, which enters the contact. The error also counts sigma_Y max(g, 0) over the
+capped points (capped points whose gap would open). This is the same quadratic programme on
+{0 <= p <= sigma_Y, mean p = p0} (as solved by Tamaas' ``KatoSaturated``; Almqvist et al.,
 Tribol. Int. 40, 574 (2007)).
 
 Units: SI (heights and pixel size in m, pressures in Pa, compliance in m/Pa). See
