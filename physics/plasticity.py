@@ -17,8 +17,8 @@ With tau = G / sigma_Y^2 (dimensionless) every quantity has two exact forms:
   exp(-(2|m| - 1)^2 / (4 tau)): fast where tau is small.
 
 The kernels use the images for tau < :data:`TAU_SWITCH` = 0.02 and the series at and above it,
-with N = 4, 8 or 16 terms for tau >= 0.3, 0.08 or 0.02 (:data:`SERIES_BINS`): the first term
-left out is below exp(-(N + 1)^2 pi^2 tau) <= exp(-57) ~ 1e-25 of the first. Below the switch
+with N = 1, 2, 3, 4, 8 or 16 terms for tau >= 1.5, 0.65, 0.37, 0.3, 0.08 or 0.02 (:data:`SERIES_BINS`):
+the first term left out is below exp(-(N + 1)^2 pi^2 tau) <= exp(-57) ~ 1e-25 of the first. Below the switch
 the image pairs m = -1, 0, 1 (:data:`IMAGE_PAIRS`) suffice: the next pairs lie at least
 2 sigma_Y outside [0, sigma_Y] and weigh exp(-1/tau) < exp(-50) ~ 1e-22. Where the wall at
 sigma_Y lies beyond :data:`FAR` = 27 diffusion lengths 2 sqrt(G) of p (every image term below
@@ -41,9 +41,12 @@ from .special import erf, ndtr
 
 #: below this tau = G / sigma_Y^2 the method of images, at and above it the sine series
 TAU_SWITCH = 0.02
-#: the sine series' terms n = 1 .. N for tau at or above each bound: exp(-(N + 1)^2 pi^2 tau) < 1e-18
-#: at the bound (the next term's size relative to the first)
-SERIES_BINS = ((0.3, 4), (0.08, 8), (TAU_SWITCH, 16))
+#: the sine series' terms n = 1 .. N for tau at or above each bound: exp(-(N + 1)^2 pi^2 tau) < exp(-57)
+#: ~ 2e-25 at the bound (the next term's size relative to the first); most of a sweep over zeta has
+#: tau >= 1.5, where one term is exact
+SERIES_BINS = ((1.5, 1), (0.65, 2), (0.37, 3), (0.3, 4), (0.08, 8), (TAU_SWITCH, 16))
+#: the bounds of SERIES_BINS, increasing (for searchsorted)
+_BOUNDS = np.array([bound for bound, _ in SERIES_BINS[::-1]])
 #: the largest number of series terms
 SERIES_TERMS = 16
 #: image pairs m = -IMAGE_PAIRS .. IMAGE_PAIRS (the next pairs weigh exp(-1 / tau) < 1e-21 below TAU_SWITCH)
@@ -90,25 +93,36 @@ def _dispatch(p, G, sigma_Y, series, images, one_wall, saturated):
     p, G, sigma_Y = _inputs(p, G, sigma_Y)
     shape = p.shape
     p, G, sigma_Y = p.ravel(), G.ravel(), sigma_Y.ravel()
-    out = np.empty((len(saturated), p.size))
-    sat = p >= sigma_Y
-    with np.errstate(over="ignore", divide="ignore"):
+    with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
         tau = G / sigma_Y**2
-        far = ~sat & ((sigma_Y - p) > FAR * 2.0 * np.sqrt(G))
-    out[:, sat] = np.asarray(saturated, dtype=float)[:, None]
-    out[:, far] = one_wall(p[far], G[far])
-    img = ~(sat | far) & (tau < TAU_SWITCH)
-    out[:, img] = images(p[img], G[img], sigma_Y[img])
-    done = sat | far | img
-    for bound, terms in SERIES_BINS:
-        here = ~done & (tau >= bound)
-        out[:, here] = series(p[here], G[here], sigma_Y[here], terms)
-        done |= here
+        far = (sigma_Y - p) > FAR * 2.0 * np.sqrt(G)
+    # regime of each point: 0 saturated, 1 one wall, 2 images, 3 + i the series of SERIES_BINS[i];
+    # the points are sorted by regime once, so that each form runs on one contiguous slice
+    code = (3 + len(_BOUNDS) - np.searchsorted(_BOUNDS, tau, side="right")).astype(np.int8)
+    code[tau < TAU_SWITCH] = 2
+    code[far] = 1
+    code[p >= sigma_Y] = 0
+    order = np.argsort(code, kind="stable")
+    ends = np.cumsum(np.bincount(code, minlength=3 + len(SERIES_BINS)))
+    p, G, sigma_Y = p[order], G[order], sigma_Y[order]
+    sorted_out = np.empty((len(saturated), p.size))
+    forms = [lambda a, b, c: np.asarray(saturated, dtype=float)[:, None], lambda a, b, c: one_wall(a, b), images]
+    forms += [lambda a, b, c, n=terms: series(a, b, c, n) for _, terms in SERIES_BINS]
+    for form, lo, hi in zip(forms, np.concatenate([[0], ends[:-1]]), ends, strict=True):
+        if hi > lo:
+            sorted_out[:, lo:hi] = form(p[lo:hi], G[lo:hi], sigma_Y[lo:hi])
+    out = np.empty_like(sorted_out)
+    out[:, order] = sorted_out
     return out.reshape((len(saturated), *shape))
 
 
 def _areas_series(p, G, sigma_Y, terms):
-    """A_el/A0 and A_pl/A0 from one set of modes."""
+    """A_el/A0 and A_pl/A0 from one set of modes (one term: the same arithmetic on 1-d arrays)."""
+    if terms == 1:
+        k = np.pi / sigma_Y
+        with np.errstate(under="ignore"):
+            weighted = np.sin(k * p) * np.exp(-(k * k) * G)
+        return np.stack([(4.0 / np.pi) * weighted, (p - 2.0 * (weighted / k)) / sigma_Y])
     n, k, s, decay = _modes(p, G, sigma_Y, terms)
     weighted = s * decay
     a_el = np.sum(((n % 2 == 1) * 4.0 / (n * np.pi)) * weighted, axis=-1)
@@ -117,7 +131,33 @@ def _areas_series(p, G, sigma_Y, terms):
 
 
 def _areas_images(p, G, sigma_Y):
-    return np.stack([_elastic_area_images(p, G, sigma_Y), _plastic_area_images(p, G, sigma_Y)])
+    """A_el/A0 and A_pl/A0 of the image pairs m = -1, 0, 1 (:data:`IMAGE_PAIRS`) in closed form.
+
+    With 0 < p < sigma_Y the sign of every charge's distance to each wall is known, and the sums of
+    :func:`_elastic_area_images` and :func:`_plastic_area_images` collapse to error functions of
+    u, w, v = (k sigma_Y -+ p) / 2 sqrt G, k = 1, 2, 3:
+
+        A_el(p) = erf(p / 2 sqrt G) + [erfc w- - erfc w+] - [erfc u- - erfc u+] - [erfc v- - erfc v+] / 2,
+        A_pl(p) = [erfc u- - erfc u+] + [erfc v- - erfc v+] / 2.
+
+    A_el is evaluated at min(p, sigma_Y - p) (the two walls are alike: A_el(p) = A_el(sigma_Y - p)),
+    so that near p = sigma_Y it keeps its relative precision (no cancellation of erf ~ 1 against
+    erfc ~ 1); A_pl has none to fear (erfc u- ~ 1 there, erfc u+ tiny)."""
+    s = 2.0 * np.sqrt(G)
+    k = np.array([1.0, 2.0, 3.0])[:, None] * sigma_Y
+    x = np.minimum(p, sigma_Y - p)
+    # erfc of u-, w-, v-, u+, w+, v+ at x, then of u-, v-, u+, v+ at p
+    t = _erfc(np.concatenate([k - x, k + x, k[::2] - p, k[::2] + p]) / s)
+    a_el = erf(x / s) + (t[1] - t[4]) - (t[0] - t[3]) - 0.5 * (t[2] - t[5])
+    return np.stack([a_el, (t[6] - t[8]) + 0.5 * (t[7] - t[9])])
+
+
+def _elastic_area_images_closed(p, G, sigma_Y):
+    return _areas_images(p, G, sigma_Y)[0]
+
+
+def _plastic_area_images_closed(p, G, sigma_Y):
+    return _areas_images(p, G, sigma_Y)[1]
 
 
 # --- sine series (tau >= TAU_SWITCH) -------------------------------------------------------------
@@ -256,7 +296,7 @@ def elastic_area_ratio(p, G, sigma_Y):
     Persson, Phys. Rev. Lett. 87, 116101 (2001); Persson, J. Chem. Phys. 115, 3840 (2001);
     docs/theory.md, section "Elastoplastic contact".
     """
-    return _one(_elastic_area_series, _elastic_area_images, contact_area_ratio, 0.0)(p, G, sigma_Y)
+    return _one(_elastic_area_series, _elastic_area_images_closed, contact_area_ratio, 0.0)(p, G, sigma_Y)
 
 
 def plastic_area_ratio(p, G, sigma_Y):
@@ -293,7 +333,7 @@ def plastic_area_ratio(p, G, sigma_Y):
     ----------
     Persson, Phys. Rev. Lett. 87, 116101 (2001); docs/theory.md, section "Elastoplastic contact".
     """
-    return _one(_plastic_area_series, _plastic_area_images, lambda p, G: np.zeros_like(p), 1.0)(p, G, sigma_Y)
+    return _one(_plastic_area_series, _plastic_area_images_closed, lambda p, G: np.zeros_like(p), 1.0)(p, G, sigma_Y)
 
 
 def elastic_load(p, G, sigma_Y):

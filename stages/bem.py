@@ -18,7 +18,9 @@ import numpy as np
 import xarray as xr
 
 from roughcontact.physics.bem import SolverMissing, SubPixelContact, contact_pair, tamaas_module
+from roughcontact.physics.bem_cg import NoConvergence, saturated_areas
 from roughcontact.physics.estimators import rms_slope_of_map
+from roughcontact.physics.plasticity import elastoplastic_areas
 from roughcontact.physics.synthesis import band_limit, grid_band, synthesize_pair, white_noise_pair
 from roughcontact.stage import (
     Figure,
@@ -34,7 +36,7 @@ from roughcontact.stage import (
     register_section,
 )
 
-from .figures.bem import figure_bem_comparison, figure_bem_reduced_pressure
+from .figures.bem import figure_bem_comparison, figure_bem_elastoplastic, figure_bem_reduced_pressure
 from .figures.bem_fields import field_figures
 from .shared.bem_fields import FIELD_KEYS, MAPS as FIELD_MAPS, PARAMS as FIELD_PARAMS, Fields, with_fields
 from .shared.maps import check_eta, map_band, map_surfaces, measured_maps, topography_files
@@ -44,6 +46,11 @@ from .shared.variants import THEORY, VARIANT_KEYS, VARIANTS, theory_variants, va
 
 #: the optional dependency and how to install it (named in the error without it)
 EXTRA = 'pip install "roughcontact[bem]"'
+
+#: elastoplastic outputs (contact.yield_stress): per realization, and over (p, eta)
+PLASTIC_REALIZATIONS = ("bem_elastic_contact_area_ratio", "bem_plastic_contact_area_ratio")
+PLASTIC = (*PLASTIC_REALIZATIONS, *(f"{n}_{s}" for n in PLASTIC_REALIZATIONS for s in ("mean", "std")),
+           "theory_elastic_contact_area_ratio", "theory_plastic_contact_area_ratio")
 
 register_section(
     Section(
@@ -129,9 +136,14 @@ def single_surfaces(sizes) -> None:
 
 
 def check_bem(inp: StageInput) -> None:
-    """The optional dependency, usable measured maps, and no coating (Tamaas' kernel is the half-space's)."""
+    """The optional dependency, usable measured maps, no coating (Tamaas' kernel is the half-space's), and a
+    hardness for the elastoplastic outputs."""
     refuse_coating(inp, "the BEM (its surface kernel is the homogeneous half-space's)")
     solver()
+    asked = sorted(set(PLASTIC) & inp.wanted)
+    if asked and inp["contact.yield_stress"] is None:
+        raise UserError(f"{asked[0]} needs a penetration hardness: set [contact] yield_stress (e.g. \"1.5 GPa\")",
+                        key="contact.yield_stress")
     names = map_surfaces(inp)
     check_eta(inp, names)
     if names:
@@ -146,6 +158,7 @@ _SPANS = {
     **dict.fromkeys(("bem_hrms_combined", "bem_rms_slope_combined"), ("eta", "realization")),
     **dict.fromkeys(("theory_variant_contact_area_ratio", "theory_variant_mean_separation",
                      "area_ratio_variant_to_bem", "separation_ratio_variant_to_bem"), ("p", "eta", "theory")),
+    **dict.fromkeys(PLASTIC_REALIZATIONS, ("p", "eta", "realization")),
     **dict.fromkeys(("bem_zeta", "bem_q_cut", "bem_system_size", "bem_pixel_size", "bem_grid", "E_star"), ()),
 }
 _DIMS_ALL = ("p", "eta", "zeta", "realization", "bem_stress_level", "theory")  # zeta: the contact stage's
@@ -178,7 +191,7 @@ def _bem_shape(inp: StageInput, maps, points: int) -> Shape:
 #: the outputs over (p, eta) alone
 _SPAN_P_ETA = ("bem_contact_area_ratio_mean", "bem_contact_area_ratio_std", "bem_mean_gap_mean", "bem_mean_gap_std",
                "theory_contact_area_ratio", "theory_mean_separation", "area_ratio_theory_to_bem",
-               "separation_ratio_theory_to_bem")
+               "separation_ratio_theory_to_bem", *(n for n in PLASTIC if n not in PLASTIC_REALIZATIONS))
 
 
 def describe_bem(inp: StageInput) -> Shape:
@@ -358,6 +371,8 @@ def compute_bem(inp: StageInput) -> xr.Dataset:
         ds["area_ratio_theory_to_bem"] = (("p", "eta"), t_area / ds["bem_contact_area_ratio_mean"].values)
         ds["separation_ratio_theory_to_bem"] = (("p", "eta"), t_gap / ds["bem_mean_gap_mean"].values)
     ds = _with_variants(inp, ds, psd, q, zeta_bem, p_values, has_eta, E_star)
+    if set(PLASTIC) & inp.wanted:
+        ds = _with_hardness(inp, ds, band, q, C1, C2, E_star, p_values, eta_values, G_pe)
     ds = fields.add_to(ds, p_values)
     for k, v in attrs.items():
         ds[k] = xr.DataArray(v)
@@ -367,6 +382,41 @@ def compute_bem(inp: StageInput) -> xr.Dataset:
         ds = ds.isel(eta=0, drop=True)
     if np.ndim(inp["load.p"]) == 0:
         ds = ds.isel(p=0)
+    return ds
+
+
+def _with_hardness(inp, ds, band, q, C1, C2, E_star, p_values, eta_values, G_pe) -> xr.Dataset:
+    """The elastic and plastic contact area with the surface hardness contact.yield_stress:
+    the saturated BEM (pressure bounded by sigma_Y; physics/bem_cg.py) on the same map pairs,
+    and the theory's (two absorbing walls, physics/plasticity.py) at the BEM's magnification."""
+    Y = float(inp["contact.yield_stress"])
+    R = band["R"]
+    shape = (p_values.size, eta_values.size, R)
+    el, pl = np.empty(shape), np.empty(shape)
+    tick = inp.progress("BEM elastoplastic solves",
+                        total=p_values.size * (1 if band["maps"] is not None else R * eta_values.size), unit="solve")
+    for j, r, h1, h2 in map_pairs(band, q, C1, C2, eta_values):
+        try:
+            res = saturated_areas(h1 - h2, band["dx"], E_star, p_values, Y, tolerance=inp["numerics.bem_tolerance"],
+                                  progress=tick)
+        except NoConvergence as exc:
+            raise UserError(f"the saturated BEM did not converge ({exc}); use a larger numerics.bem_tolerance",
+                            key="numerics.bem_tolerance") from None
+        el[:, j, r], pl[:, j, r] = res["elastic_area"], res["plastic_area"]
+    attrs = {"yield_stress_Pa": Y, "bem_solver": "roughcontact.physics.bem_cg, Polonsky-Keer with the pressure "
+             "bounded by yield_stress (Kato's saturated contact)"}
+    dims = ("p", "eta", "realization")
+    t_el, t_pl = elastoplastic_areas(p_values[:, None], np.asarray(G_pe)[None, :], Y)
+    values = {"bem_elastic_contact_area_ratio": el, "bem_plastic_contact_area_ratio": pl}
+    for name, a in values.items():
+        out = {name: (dims, a), f"{name}_mean": (dims[:2], a.mean(axis=-1)),
+               f"{name}_std": (dims[:2], a.std(axis=-1, ddof=1 if R > 1 else 0))}
+        for k, v in out.items():
+            if k in inp.wanted:
+                ds[k] = xr.Variable(*v, attrs=attrs)
+    for k, v in (("theory_elastic_contact_area_ratio", t_el), ("theory_plastic_contact_area_ratio", t_pl)):
+        if k in inp.wanted:
+            ds[k] = xr.Variable(("p", "eta"), v, attrs={"yield_stress_Pa": Y})
     return ds
 
 
@@ -402,10 +452,26 @@ _BAND_NAMES = {
 _BAND_UNITS = {"bem_zeta": "1", "bem_q_cut": "1/m", "bem_system_size": "m", "bem_pixel_size": "m", "bem_grid": "1"}
 _THEORY = "at the BEM's magnification bem_zeta"
 
+_HARD = "with the penetration hardness contact.yield_stress"
+_PLASTIC_VARS = {
+    "bem_elastic_contact_area_ratio": Var("1", "elastic contact area A_el/A0, BEM", optional=True, attrs={
+        "comment": f"saturated BEM {_HARD}: fraction of pixels with 0 < p < yield_stress, per realization"}),
+    "bem_plastic_contact_area_ratio": Var("1", "plastic contact area A_pl/A0, BEM", optional=True, attrs={
+        "comment": f"saturated BEM {_HARD}: fraction of pixels at p = yield_stress, per realization"}),
+    "bem_elastic_contact_area_ratio_mean": Var("1", "BEM A_el/A0, mean over realizations", optional=True),
+    "bem_elastic_contact_area_ratio_std": Var("1", "BEM A_el/A0, std over realizations", optional=True),
+    "bem_plastic_contact_area_ratio_mean": Var("1", "BEM A_pl/A0, mean over realizations", optional=True),
+    "bem_plastic_contact_area_ratio_std": Var("1", "BEM A_pl/A0, std over realizations", optional=True),
+    "theory_elastic_contact_area_ratio": Var("1", "elastic contact area A_el/A0, theory", optional=True, attrs={
+        "comment": f"Persson's theory {_HARD} (docs/plasticity.md) {_THEORY}"}),
+    "theory_plastic_contact_area_ratio": Var("1", "plastic contact area A_pl/A0, theory", optional=True, attrs={
+        "comment": f"Persson's theory {_HARD} (docs/plasticity.md) {_THEORY}"}),
+}
+
 register(
     Stage(
         name="bem",
-        version="3",
+        version="4",  # contact.yield_stress (default none) adds optional outputs only
         compute=compute_bem,
         check=check_bem,
         describe=describe_bem,
@@ -417,7 +483,7 @@ register(
                *surface_reads({"topography": MAP_KEYS, "fit": ("height_unit", "fill_undefined"), "*": ()}),
                "bem.surfaces", "bem.grid", "bem.realizations", "bem.seed", "bem.pixels_per_wavelength",
                "numerics.bem_tolerance", "numerics.bem_stress_bins", "numerics.sigma_width", *VARIANT_KEYS,
-               *FIELD_KEYS, *COATING_KEYS),
+               "contact.yield_stress", *FIELD_KEYS, *COATING_KEYS),
         files=(topography_files("substrate"), topography_files("solid")),
         outputs={
             "bem_contact_area_ratio": Var("1", "relative contact area A/A0, BEM",
@@ -465,6 +531,7 @@ register(
             **{k: Var(_BAND_UNITS[k], label, attrs={"comment": comment} if comment else {})
                for k, (label, comment) in _BAND_NAMES.items()},
             "E_star": E_STAR,
+            **_PLASTIC_VARS,
             **FIELD_MAPS["bem"],
         },
         coords={
@@ -479,6 +546,9 @@ register(
                         ("bem",), figure_bem_comparison),
                  Figure("bem_reduced_pressure", "theory / BEM ratios of every variant against p/(E* g)",
                         ("bem",), figure_bem_reduced_pressure),
+                 Figure("bem_elastoplastic", "A_el/A0 and A_pl/A0, theory vs saturated BEM, against p/sigma_Y",
+                        ("bem",), figure_bem_elastoplastic,
+                        outputs=tuple(n for n in PLASTIC if n not in PLASTIC_REALIZATIONS)),
                  *field_figures("bem")),
         doc="Exact FFT-BEM contact (tamaas) on synthesized or measured surface pairs, compared with the theory at "
             "the same band.",

@@ -13,6 +13,7 @@ from conftest import make_scene
 from hypothesis import given, settings, strategies as st
 from reference_solutions import contact_area_ratio as area_eq19
 from scipy import integrate
+from scipy.special import erf
 
 from roughcontact.cli import main
 from roughcontact.physics import plasticity as pl
@@ -225,3 +226,19 @@ def test_the_joint_kernel_gives_the_same_areas():
     a_el, a_pl = pl.elastoplastic_areas(p, G, Y)
     np.testing.assert_allclose(a_el, pl.elastic_area_ratio(p, G, Y), rtol=1e-14, atol=1e-300)
     np.testing.assert_allclose(a_pl, pl.plastic_area_ratio(p, G, Y), rtol=1e-14, atol=1e-300)
+
+
+@pytest.mark.parametrize("tau", [1e-6, 1e-3, 0.01, 0.0199])
+def test_closed_image_form_is_the_full_image_sum(tau, monkeypatch):
+    """The kernels' closed form of the images (three pairs, seven error functions shared by both
+    areas, A_el taken at min(p, sigma_Y - p)) against the generic image sums with m = -4 .. 4:
+    the pairs left out weigh below exp(-1/tau), and nothing else differs beyond rounding."""
+    monkeypatch.setattr(pl, "_M", np.arange(-4, 5.0))
+    p = np.array([1e-9, 1e-3, 0.2, 0.5, 0.8, 0.999, 1 - 1e-9]) * Y
+    G, Yv = np.full_like(p, tau * Y**2), np.full_like(p, Y)
+    a_el, a_pl = pl._areas_images(p, G, Yv)
+    np.testing.assert_allclose(a_el, pl._elastic_area_images(p, G, Yv), rtol=1e-13, atol=1e-16)
+    np.testing.assert_allclose(a_pl, pl._plastic_area_images(p, G, Yv), rtol=1e-13, atol=1e-16)
+    if tau <= 1e-3:  # the other wall out of reach (exp(-1/4 tau) < 1e-108): A_el(sigma_Y - d) = erf(d / 2 sqrt G)
+        d = Y - p[p >= Y / 2]  # exact (Sterbenz)
+        np.testing.assert_allclose(a_el[p >= Y / 2], erf(d / (2 * np.sqrt(tau) * Y)), rtol=1e-14)

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .common import eta_label, style, wavenumber
+from .common import eta_label, legend_outside, style, wavenumber
 
 #: line style of each theory variant
 _STYLES = {"persson": "-", "yang_persson": "--", "wang_mueser": ":"}
@@ -156,3 +156,60 @@ def figure_bem_reduced_pressure(results):
     fig.suptitle(f"Theory / BEM against the reduced pressure, at zeta = {zeta:.4g}", fontsize=10)
     _legend(fig, cases, variants, bem=False)
     return fig
+
+
+def figure_bem_elastoplastic(results):
+    """Elastoplastic contact, theory (lines) against the saturated BEM (markers, +- one standard
+    deviation over realizations) at the BEM's magnification: A_el/A0 (solid, open markers) and
+    A_pl/A0 (dashed, filled markers; the case's marker and colour) against p / sigma_Y, with the
+    limit p / sigma_Y of a fully yielded interface; beside them the theory / BEM ratios of A_el,
+    A_pl and the total A_el + A_pl."""
+    import matplotlib.pyplot as plt
+
+    raw = results["base"]["bem"]
+    zeta_bem, grid = float(raw["bem_zeta"]), int(raw["bem_grid"])
+    ds, measured = _prepared(results)
+    Y = float(ds["theory_plastic_contact_area_ratio"].attrs["yield_stress_Pa"])
+    fig, axes = plt.subplots(1, 2, figsize=(11.5, 4.9), layout="constrained")
+    x = ds["p"].values / Y
+    cases = []
+    kinds = (("elastic", "-", "white"), ("plastic", "--", None))  # line style, marker face (None: filled)
+    for k, eta in enumerate(ds["eta"].values):
+        d = ds.isel(eta=k)
+        case, text = _label(d, eta, measured)
+        s = style(case)
+        cases.append(text)
+        totals = {"theory": 0.0, "bem": 0.0}
+        for kind, line, face in kinds:
+            marker = dict(marker=s["marker"], color=s["color"], markerfacecolor=face or s["color"])
+            theory = d[f"theory_{kind}_contact_area_ratio"].values
+            mean, std = d[f"bem_{kind}_contact_area_ratio_mean"].values, d[f"bem_{kind}_contact_area_ratio_std"].values
+            axes[0].loglog(x, np.where(theory > 0, theory, np.nan), line, color=s["color"],
+                           label=f"theory A_{kind[:2]}/A0, {text}")
+            axes[0].errorbar(x, mean, yerr=std, linestyle="none", markersize=5, capsize=2,
+                             label=f"BEM A_{kind[:2]}/A0, {text}", **marker)
+            totals["theory"] = totals["theory"] + theory
+            totals["bem"] = totals["bem"] + mean
+            with np.errstate(divide="ignore", invalid="ignore"):
+                axes[1].loglog(x, np.where(mean > 0, theory / mean, np.nan), line, markersize=4,
+                               label=f"A_{kind[:2]}: theory / BEM, {text}", **marker)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            axes[1].loglog(x, totals["theory"] / totals["bem"], ":", marker=s["marker"], color=s["color"], markersize=4,
+                           markerfacecolor="white", markeredgecolor="0.5",
+                           label=f"A_el + A_pl: theory / BEM, {text}")
+    axes[0].loglog(x, np.minimum(x, 1.0), "-.", color="0.45", lw=1.0, label="p / sigma_Y (every spot yielded)")
+    axes[0].axvline(1.0, color="0.6", lw=0.8)
+    axes[0].set_ylim(max(1e-9, axes[0].get_ylim()[0]), 2.0)
+    axes[0].set_ylabel("relative contact area")
+    axes[0].set_title("elastic (solid line, open markers) and plastic (dashed, filled) area", fontsize=9)
+    axes[1].axhline(1.0, color="0.5", lw=0.8)
+    axes[1].set_ylabel("theory / BEM")
+    axes[1].set_title("theory / BEM (p >= sigma_Y: both fully plastic)", fontsize=9)
+    for ax in axes:
+        ax.set_xlabel("p / sigma_Y")
+        ax.grid(alpha=0.3, which="both", lw=0.4)
+    R = ds.sizes.get("realization", 1)
+    source = "the measured maps" if measured else f"{R} realization{'s' if R > 1 else ''}"
+    fig.suptitle(f"Elastoplastic contact, sigma_Y = {Y / 1e9:.3g} GPa: theory vs saturated BEM at zeta = "
+                 f"{zeta_bem:.4g} ({grid}^2 map, {source}; error bars: +- 1 s.d. over realizations)", fontsize=10)
+    return legend_outside(fig, list(axes), below=True)
