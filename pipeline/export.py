@@ -23,7 +23,7 @@ written to a temporary beside it and renamed, so a table is there whole or not a
 from __future__ import annotations
 
 import csv
-import os
+import io
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Iterable
@@ -32,7 +32,7 @@ import numpy as np
 import xarray as xr
 
 from . import engine, store
-from .errors import OutputError, UserError
+from .errors import UserError
 from .schema import did_you_mean
 
 FORMATS = ("csv", "xlsx")
@@ -121,7 +121,13 @@ def write_csv(table: Table, pairs: list[tuple[str, str]], path: Path) -> None:
         for i in range(table.rows):
             out.writerow([_text(c[i]) for c in columns])
 
-    _atomic(path, write, text=True)
+    def write_text(fh):
+        text = io.TextIOWrapper(fh, encoding="utf-8", newline="")
+        write(text)
+        text.flush()
+        text.detach()
+
+    store.write_file(write_text, path, what="table")
 
 
 def write_xlsx(tables_: list[Table], pairs: list[tuple[str, str]], path: Path) -> None:
@@ -139,7 +145,7 @@ def write_xlsx(tables_: list[Table], pairs: list[tuple[str, str]], path: Path) -
                 frame.to_excel(xl, sheet_name=_sheet(table.name), index=False, inf_rep="inf")
             pd.DataFrame(rows, columns=["attribute", "value"]).to_excel(xl, sheet_name="provenance", index=False)
 
-    _atomic(path, write, text=False)
+    store.write_file(write, path, what="table")
 
 
 def _sheet(name: str) -> str:
@@ -147,23 +153,6 @@ def _sheet(name: str) -> str:
     for ch in "[]:*?/\\":
         name = name.replace(ch, "_")
     return name[:31]
-
-
-def _atomic(path: Path, write, text: bool) -> None:
-    """Write ``path`` whole or not at all: a temporary beside it, then a rename."""
-    tmp = path.with_name(f"{store.TMP_PREFIX}{path.name}")
-    try:
-        with open(tmp, "w" if text else "wb", newline="" if text else None, encoding="utf-8" if text else None) as fh:
-            write(fh)
-        os.chmod(tmp, store.new_file_mode())
-        tmp.replace(path)
-    except OSError as exc:
-        tmp.unlink(missing_ok=True)
-        raise OutputError(f"cannot write this table ({exc.strerror or exc}); nothing of it was kept",
-                          file=str(path)) from None
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
 
 
 def check_format(fmt: str) -> None:

@@ -18,7 +18,7 @@ import socket
 import subprocess
 import tempfile
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any, BinaryIO, Callable, Mapping
 
 import numpy as np
 import xarray as xr
@@ -237,28 +237,27 @@ def _write_in_memory(ds: xr.Dataset, path, encoding: dict) -> None:
 
 
 def write_figure(fig, path: Path, dpi: int = 130) -> None:
-    """Save a matplotlib figure as PNG at ``path`` whole or not at all: drawn into a temporary
-    file beside it, then renamed; a figure that cannot be written (full disk, no permission) is
-    an :class:`OutputError` naming it, and nothing of it is kept. The caller closes the figure."""
-    path = Path(path)
-    tmp = path.with_name(f"{TMP_PREFIX}{path.name}")
-    try:
-        fig.savefig(tmp, dpi=dpi)
-        tmp.replace(path)
-    except OSError as exc:
-        tmp.unlink(missing_ok=True)
-        raise OutputError(f"cannot write this figure ({exc.strerror or exc}); nothing of it was kept",
-                          file=str(path)) from None
+    """Save a matplotlib figure as PNG at ``path`` whole or not at all (see :func:`write_file`).
+    The caller closes the figure."""
+    write_file(lambda fh: fig.savefig(fh, format="png", dpi=dpi), path, what="figure")
 
 
-def write_file(data: bytes, path: Path, what: str = "file") -> None:
-    """Write ``data`` to ``path`` whole or not at all (a temporary beside it, then a rename); a
-    file that cannot be written is an :class:`OutputError` naming it (``what``: "report", ...)."""
+def write_file(content: bytes | Callable[[BinaryIO], object], path: Path, what: str = "file") -> None:
+    """Write a file whole or not at all: into a temporary beside it (named by host and process, so
+    :func:`clean_temporaries` never removes a live writer's), synced, then renamed over ``path``.
+
+    ``content`` is the bytes, or a function that writes them to the binary file handle it is given
+    (a figure, a table, a spreadsheet). A file that cannot be written (full disk, no permission)
+    is an :class:`OutputError` naming it (``what``: "report", "figure", "table", ...), and nothing
+    of it is kept; an interruption keeps nothing either."""
     path = Path(path)
     tmp = path.with_name(f"{TMP_PREFIX}{path.name}.{_owner()}")
     try:
         with open(tmp, "wb") as fh:
-            fh.write(data)
+            if callable(content):
+                content(fh)
+            else:
+                fh.write(content)
             fh.flush()
             os.fsync(fh.fileno())
         os.chmod(tmp, new_file_mode())
