@@ -188,16 +188,23 @@ def _as_completed(tasks: Mapping[tuple, list], compute_with, client, pool, worke
     if client is not None:
         from distributed import as_completed
 
+        def submit(task):
+            # The block's arrays are optimised as one graph (client.compute of the list), so work
+            # they share (the BEM solve behind a task's area, gap and time) is one task on the
+            # cluster; wrapping them in dask.delayed optimised (fused) each array on its own and
+            # ran that shared work once per array (three solves per validation task).
+            return client.submit(_together, *client.compute(list(task)), pure=False)
+
         window = as_completed(loop=client.loop)
         owner = {}
         for idx, task in itertools.islice(todo, 2 * workers):
-            future = client.compute(dask.delayed(_together)(*task))
+            future = submit(task)
             owner[future.key] = idx
             window.add(future)
         for future in window:
             yield owner.pop(future.key), future.result()
             for idx, task in itertools.islice(todo, 1):
-                nxt = client.compute(dask.delayed(_together)(*task))
+                nxt = submit(task)
                 owner[nxt.key] = idx
                 window.add(nxt)
         return
