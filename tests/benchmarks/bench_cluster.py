@@ -15,6 +15,13 @@ then does the same with git revision REV of this repository (exported and import
 temporary folder, as bench_startup.py does): before and after in one run, the versions one after
 the other. The load average is printed with every run.
 
+On a shared machine the wall times follow the other jobs' load, which changes within a minute. So
+the workers' CPU seconds are measured too (each worker's, over each run): their total says how much
+work the tasks were (the same for any number of workers, unless work is duplicated), and the
+largest says how well the tasks were shared out. Since a task computes in one thread, total CPU of
+one worker / the makespan the n workers' CPU seconds allow on cores of their own is the speed-up an
+otherwise idle machine would show (up to the scheduling gaps, which the wall times include).
+
 --smoke: one run on a 2-worker LocalCluster on a tiny scene (32^2 grids): checks that the cluster
 path completes (seconds; the numbers mean nothing).
 """
@@ -57,7 +64,7 @@ def child(counts: list[int], repeat: int, outdir: str, smoke: bool) -> None:
     interleaved (a different one first each round); one JSON line per run."""
     from contextlib import ExitStack
 
-    from distributed import LocalCluster
+    from distributed import Client, LocalCluster
 
     import roughcontact.scheduling as scheduling
     from roughcontact import engine, scene as scenes
@@ -75,16 +82,33 @@ def child(counts: list[int], repeat: int, outdir: str, smoke: bool) -> None:
     with ExitStack() as stack:
         clusters = {w: stack.enter_context(LocalCluster(n_workers=w, threads_per_worker=1, processes=True,
                                                         dashboard_address=None)) for w in counts}
+        clients = {w: stack.enter_context(Client(c, set_as_default=False)) for w, c in clusters.items()}
         for r in range(repeat):
             for w in counts[r % len(counts):] + counts[:r % len(counts)]:
                 load = os.getloadavg()[0]
+                cpu0 = clients[w].run(_cpu)
                 t0 = time.perf_counter()
                 res = engine.run(sc, Path(outdir) / f"{w}-{r}", report=engine.Reporter(None),
                                  scheduler=clusters[w].scheduler_address)
                 wall = time.perf_counter() - t0
+                cpu = [c - cpu0[k] for k, c in clients[w].run(_cpu).items()]
                 area = res["base"]["validation_bem"]["validation_bem_contact_area_ratio"]
                 print(json.dumps({"round": r, "workers": w, "run": wall, "tasks": marks["end"] - marks["start"],
-                                  "solved": int(area.notnull().sum()), "load": load}), flush=True)
+                                  "solved": int(area.notnull().sum()), "load": load, "cpu": cpu}), flush=True)
+
+
+def _cpu() -> float:
+    """CPU seconds of this (worker) process so far."""
+    import resource
+
+    r = resource.getrusage(resource.RUSAGE_SELF)
+    return r.ru_utime + r.ru_stime
+
+
+def dedicated(cpu: list[float], cores: int) -> float:
+    """The makespan the workers' CPU seconds ``cpu`` allow on ``cores`` cores of their own: the
+    busiest worker's, or the work shared out over the cores if there are fewer cores than workers."""
+    return max(max(cpu), sum(cpu) / min(cores, len(cpu)))
 
 
 def _measure(version: str, counts: list[int], repeat: int, outdir: Path, env: dict, smoke: bool) -> dict:
@@ -96,7 +120,8 @@ def _measure(version: str, counts: list[int], repeat: int, outdir: Path, env: di
             m = json.loads(line)
             runs[m["workers"]].append(m)
             print(f"{version:>8} round {m['round'] + 1} (load {m['load']:.1f}) {m['workers']} worker(s): run "
-                  f"{m['run']:6.1f} s, BEM tasks {m['tasks']:6.1f} s ({m['solved']} values)", flush=True)
+                  f"{m['run']:6.1f} s, BEM tasks {m['tasks']:6.1f} s ({m['solved']} values); CPU s per worker "
+                  f"{' '.join(f'{c:.1f}' for c in m['cpu'])}", flush=True)
     if proc.returncode:
         raise SystemExit(f"{' '.join(cmd)} failed")
     return runs
@@ -131,6 +156,16 @@ def main() -> None:
                 ratios = [a[part] / b[part] for a, b in zip(runs[1], runs[w], strict=True)]
                 print(f"  {version:>8} 1 -> {w} workers, {'BEM tasks' if part == 'tasks' else 'whole run':9}: "
                       f"{statistics.median(ratios):.2f}x  (rounds {', '.join(f'{x:.2f}' for x in ratios)})")
+    cores = os.cpu_count() or 1
+    print(f"\nfrom the workers' CPU seconds (the same on a loaded machine; tamaas computes in one thread):\n"
+          f"  speed-up on {cores} cores of their own = total CPU s of 1 worker / makespan the n workers' CPU s allow "
+          f"(the busiest worker's, or the total over {cores} cores)")
+    for version, runs in times.items():
+        for w in counts:
+            total = statistics.median(sum(m["cpu"]) for m in runs[w])
+            ratios = [sum(a["cpu"]) / dedicated(b["cpu"], cores) for a, b in zip(runs[1], runs[w], strict=True)]
+            print(f"  {version:>8} {w} worker(s): {total:.1f} CPU s in all (median), speed-up from 1 worker on "
+                  f"{cores} cores of their own: {statistics.median(ratios):.2f}x")
     if args.baseline:
         for w in counts:
             before = statistics.median(m["run"] for m in times[args.baseline][w])
