@@ -18,9 +18,11 @@ the other. The load average is printed with every run.
 On a shared machine the wall times follow the other jobs' load, which changes within a minute. So
 the workers' CPU seconds are measured too (each worker's, over each run): their total says how much
 work the tasks were (the same for any number of workers, unless work is duplicated), and the
-largest says how well the tasks were shared out. Since a task computes in one thread, total CPU of
-one worker / the makespan the n workers' CPU seconds allow on cores of their own is the speed-up an
-otherwise idle machine would show (up to the scheduling gaps, which the wall times include).
+largest says how the tasks were shared out. Since a task computes in one thread, the total CPU of
+one worker over the makespan the n workers' CPU seconds allow on cores of their own estimates what
+an otherwise idle machine would show (up to the scheduling gaps, which the wall times include): at
+best with the work shared out evenly, and with the split observed, which on a loaded machine also
+follows how much CPU each worker got (a worker that got less finished fewer tasks).
 
 --smoke: one run on a 2-worker LocalCluster on a tiny scene (32^2 grids): checks that the cluster
 path completes (seconds; the numbers mean nothing).
@@ -157,15 +159,17 @@ def main() -> None:
                 print(f"  {version:>8} 1 -> {w} workers, {'BEM tasks' if part == 'tasks' else 'whole run':9}: "
                       f"{statistics.median(ratios):.2f}x  (rounds {', '.join(f'{x:.2f}' for x in ratios)})")
     cores = os.cpu_count() or 1
-    print(f"\nfrom the workers' CPU seconds (the same on a loaded machine; tamaas computes in one thread):\n"
-          f"  speed-up on {cores} cores of their own = total CPU s of 1 worker / makespan the n workers' CPU s allow "
-          f"(the busiest worker's, or the total over {cores} cores)")
+    print(f"\nfrom the workers' CPU seconds (a task computes in one thread): the work, and the speed-up the same runs "
+          f"would give on {cores} cores of their own, at best (the work shared out evenly) and with the split "
+          f"observed (the busiest worker's share; on a loaded machine it also follows the CPU each worker got)")
     for version, runs in times.items():
         for w in counts:
             total = statistics.median(sum(m["cpu"]) for m in runs[w])
-            ratios = [sum(a["cpu"]) / dedicated(b["cpu"], cores) for a, b in zip(runs[1], runs[w], strict=True)]
-            print(f"  {version:>8} {w} worker(s): {total:.1f} CPU s in all (median), speed-up from 1 worker on "
-                  f"{cores} cores of their own: {statistics.median(ratios):.2f}x")
+            best = [sum(a["cpu"]) / (sum(b["cpu"]) / min(cores, w)) for a, b in zip(runs[1], runs[w], strict=True)]
+            split = [sum(a["cpu"]) / dedicated(b["cpu"], cores) for a, b in zip(runs[1], runs[w], strict=True)]
+            print(f"  {version:>8} {w} worker(s): {total:.1f} CPU s in all (median); speed-up from 1 worker on {cores} "
+                  f"cores of their own: at best {statistics.median(best):.2f}x, with the observed split "
+                  f"{statistics.median(split):.2f}x")
     if args.baseline:
         for w in counts:
             before = statistics.median(m["run"] for m in times[args.baseline][w])
