@@ -24,6 +24,8 @@ See docs/theory.md, section "Friction"; Persson, J. Chem. Phys. 115, 3840 (2001)
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .corrections import corrected_area
@@ -31,6 +33,26 @@ from .inputs import require_pressure
 from .quadrature import cumulative_integral, gauss_legendre, running_weighted_integral
 from .special import erf
 from .viscoelastic import modulus_at
+
+#: Elements of one temporary array of the kernels below (125 KiB of float64): they work through
+#: their leading axes (velocities, cases) a few rows at a time, so that each of their many
+#: temporaries stays below glibc's mmap threshold (128 KiB) and in a core's L2 cache, and the
+#: memory one chunk frees is reused by the next. Whole-array temporaries (2.5-7.7 MB each for 100
+#: velocities x 4 cases) were mapped fresh from the OS and returned to it on every call: about 20 000
+#: page faults and as much system time as computing. Chunking changes no value (docs/scale-out.md).
+CHUNK_ELEMENTS = 16_000
+
+
+def _row_chunks(lead: tuple, per_row: int):
+    """Index tuples of consecutive rows of the leading shape ``lead`` (each row ``per_row``
+    elements of work), about :data:`CHUNK_ELEMENTS` elements a chunk; ``()`` for no leading axes."""
+    if not lead:
+        yield ()
+        return
+    rows = math.prod(lead)
+    step = max(1, CHUNK_ELEMENTS // max(int(per_row), 1))
+    for start in range(0, rows, step):
+        yield np.unravel_index(np.arange(start, min(start + step, rows)), lead)
 
 
 def _k(sigma0, nu):
@@ -74,14 +96,21 @@ def angular_integrals(q, v, omega_grid, storage, loss, n_phi):
     loss = np.asarray(loss, dtype=float)
     phi, weight = gauss_legendre(0.0, 0.5 * np.pi, n_phi)
     cos = np.cos(phi)
-    lead = np.broadcast_shapes(v.shape, storage.shape[:-1])
-    omega = v[..., None, None] * q[:, None] * cos  # (..., n, n_phi)
-    omega = np.broadcast_to(omega, lead + (q.size, cos.size)).reshape(lead + (q.size * cos.size,))
-    Ep, Epp = modulus_at(omega, omega_grid, storage, loss)
-    Ep = Ep.reshape(lead + (q.size, cos.size))
-    Epp = Epp.reshape(lead + (q.size, cos.size))
-    A = (Ep * Ep + Epp * Epp) @ weight
-    B = (Epp * cos) @ weight
+    lead = np.broadcast_shapes(v.shape, storage.shape[:-1], loss.shape[:-1])
+    qcos = q[:, None] * cos  # (n, n_phi)
+    A, B = np.empty(lead + q.shape), np.empty(lead + q.shape)
+    v_rows = np.broadcast_to(v, lead)
+    shared = storage.ndim == 1 and loss.ndim == 1  # one modulus for every row: not gathered per chunk
+    if not shared:
+        storage = np.broadcast_to(storage, lead + storage.shape[-1:])
+        loss = np.broadcast_to(loss, lead + loss.shape[-1:])
+    for rows in _row_chunks(lead, qcos.size):  # a few rows at a time (CHUNK_ELEMENTS)
+        vr = v_rows[rows]
+        omega = (vr[..., None, None] * qcos).reshape(vr.shape + (qcos.size,))
+        Ep, Epp = modulus_at(omega, omega_grid, storage if shared else storage[rows], loss if shared else loss[rows])
+        Ep, Epp = Ep.reshape(vr.shape + qcos.shape), Epp.reshape(vr.shape + qcos.shape)
+        A[rows] = (Ep * Ep + Epp * Epp) @ weight
+        B[rows] = (Epp * cos) @ weight
     return A, B
 
 
@@ -241,21 +270,36 @@ def friction_kernel(q, C, A, B, sigma0, nu, correction="none", gamma=0.5, extras
     3840 (2001).
     """
     k = _k(sigma0, nu)
-    g = 0.5 * k[..., None] ** 2 * np.asarray(q) ** 3 * C * A
-    with np.errstate(divide="ignore", invalid="ignore"):
-        r = np.where(A > 0, B / np.where(A > 0, A, 1.0), 0.0)
+    q = np.asarray(q, dtype=float)
+    C, A, B = (np.asarray(x, dtype=float) for x in (C, A, B))
+    lead = np.broadcast_shapes(C.shape[:-1], A.shape[:-1], B.shape[:-1], k.shape)
+    C, A, B = (np.broadcast_to(x, lead + q.shape) for x in (C, A, B))
+    sigma0, k = np.broadcast_to(sigma0, lead), np.broadcast_to(k, lead)
+    mu, area = np.empty(lead), np.empty(lead)
+    if extras:
+        G_out, density = np.empty(lead + q.shape), np.empty(lead + q.shape)
 
     def weight(G):
         P = contact_fraction(G, area_correction, area_gamma)
         return P * area_factor(P, correction, gamma)
 
-    integral, G = running_weighted_integral(q, g, r, weight, nodes=segment_nodes)
-    mu = 4.0 / k * integral
-    P = contact_fraction(G, area_correction, area_gamma)
-    area = P[..., -1]
+    # a few (case, v) rows at a time (CHUNK_ELEMENTS): the q integral's temporaries are
+    # (rows, q segments, segment_nodes)
+    for rows in _row_chunks(lead, max(q.size - 1, 1) * segment_nodes):
+        kr, Ar, Br, Cr = k[rows], A[rows], B[rows], C[rows]
+        g = 0.5 * kr[..., None] ** 2 * q ** 3 * Cr * Ar
+        with np.errstate(divide="ignore", invalid="ignore"):
+            r = np.where(Ar > 0, Br / np.where(Ar > 0, Ar, 1.0), 0.0)
+        integral, G = running_weighted_integral(q, g, r, weight, nodes=segment_nodes)
+        mu[rows] = 4.0 / kr * integral
+        P = contact_fraction(G, area_correction, area_gamma)
+        area[rows] = P[..., -1]
+        if extras:
+            S = area_factor(P, correction, gamma)
+            G_out[rows] = G
+            density[rows] = friction_integrand(q, Cr, P, S, Br, sigma0[rows], nu) * q
     if extras:
-        S = area_factor(P, correction, gamma)
-        return mu, area, G, friction_integrand(q, C, P, S, B, sigma0, nu) * np.asarray(q)
+        return mu, area, G_out, density
     return mu, area
 
 

@@ -175,8 +175,13 @@ class KeptBlocks:
             raise
 
 
-def _together(*values):
-    return values
+def _compute_block(arrays: bytes) -> tuple:
+    """Run on a worker: the pickled dask arrays of one block, computed together in this thread."""
+    import pickle
+
+    import dask
+
+    return dask.compute(*pickle.loads(arrays), scheduler="synchronous")
 
 
 def _as_completed(tasks: Mapping[tuple, list], compute_with, client, pool, workers: int):
@@ -186,18 +191,28 @@ def _as_completed(tasks: Mapping[tuple, list], compute_with, client, pool, worke
 
     todo = iter(tasks.items())
     if client is not None:
+        import cloudpickle
         from distributed import as_completed
+
+        def submit(task):
+            # A block is one task on the cluster: its arrays (their graph, 12 KB pickled for a
+            # validation task) computed together by one worker thread, as on the threads
+            # scheduler, so that work they share (the BEM solve behind a task's area, gap and
+            # time) is done once, and no small input task ties a block to the worker that happened
+            # to make it. (Wrapped in dask.delayed, each array was optimised on its own and the
+            # shared solve ran once per array: three solves per validation task.)
+            return client.submit(_compute_block, cloudpickle.dumps(list(task)), pure=False)
 
         window = as_completed(loop=client.loop)
         owner = {}
         for idx, task in itertools.islice(todo, 2 * workers):
-            future = client.compute(dask.delayed(_together)(*task))
+            future = submit(task)
             owner[future.key] = idx
             window.add(future)
         for future in window:
             yield owner.pop(future.key), future.result()
             for idx, task in itertools.islice(todo, 1):
-                nxt = client.compute(dask.delayed(_together)(*task))
+                nxt = submit(task)
                 owner[nxt.key] = idx
                 window.add(nxt)
         return

@@ -230,6 +230,39 @@ def test_angular_integrals_of_a_constant_modulus_are_exact():
     assert np.all(B == 0)
 
 
+@pytest.mark.parametrize("chunk", [1, 700, 16_000])
+def test_kernels_working_row_by_row_change_no_value(monkeypatch, chunk):
+    """The kernels work through their leading axes (velocities, cases, pressures) a few rows at a
+    time (physics.friction.CHUNK_ELEMENTS, to keep temporaries small): every output, on leading
+    shapes of every kind (a scalar v, v x cases, a modulus per row, pressures x cases x v), is
+    what one pass over the whole arrays gives, to 1e-14."""
+    q = log_grid(1e4, 1e7, 10)
+    C1 = 1e-20 * (q / 1e4) ** -3.6
+    C = np.stack([C1, 0.5 * C1, 2 * C1])  # 3 cases
+    grid = np.geomspace(1e-8, 1e22, 121)
+    Ep, Epp = ve.box_spectrum_modulus(grid, 5e6, 3e9, 1e-6, 1e4)
+    v = np.geomspace(1e-9, 1e3, 9)
+
+    def everything():
+        out = [physics_friction.angular_integrals(q, v, grid, Ep, Epp, 8),
+               physics_friction.angular_integrals(q, np.float64(1e-3), grid, Ep, Epp, 8),
+               physics_friction.angular_integrals(q, v[:, None], grid, np.stack([Ep, 2 * Ep]),
+                                                  np.stack([Epp, 3 * Epp]), 8)]
+        A, B = out[0]
+        p = np.array([1e5, 4e5])[:, None, None]
+        out += [physics_friction.friction_kernel(q, C[:, None, :], A[None], B[None], p, 0.5, "yang_persson", 0.5,
+                                                 True),
+                physics_friction.friction_kernel(q, C[1], A[4], B[4], np.asarray(4e5), 0.5)]
+        return [np.asarray(x) for pair in out for x in pair]
+
+    monkeypatch.setattr(physics_friction, "CHUNK_ELEMENTS", 10**12)
+    whole = everything()
+    monkeypatch.setattr(physics_friction, "CHUNK_ELEMENTS", chunk)
+    for got, want in zip(everything(), whole, strict=True):
+        assert got.shape == want.shape
+        np.testing.assert_allclose(got, want, rtol=1e-14, atol=0)
+
+
 def test_dask_chunked_sweep_equals_unchunked(tmp_path):
     raw = _scene(**{"interface.eta": [0.0, 1.0, -1.0]})
     plain = _run(raw, tmp_path / "a")["friction"]

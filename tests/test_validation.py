@@ -132,6 +132,18 @@ def _leftovers(out):
     return sorted(p.relative_to(out).as_posix() for p in out.rglob(".tmp-*"))
 
 
+def test_on_a_cluster_each_task_is_solved_once(tmp_path, monkeypatch):
+    """A task's three outputs (area, gap, time per solve) come from one BEM solve on the cluster,
+    as on threads: 4 tasks, 4 solves (each solve ran once per output before, three times the work)."""
+    distributed = pytest.importorskip("distributed")
+    calls = _count_solves(monkeypatch)  # workers in this process (processes=False) see the counter
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=None) as c:
+        res = engine.run(scenes.from_dict(LADDER), tmp_path, report=engine.Reporter(None),
+                         scheduler=c.scheduler_address)["base"]["validation_bem"]
+    assert res["validation_bem_contact_area_ratio"].notnull().all()
+    assert sorted(calls) == sorted(set(calls)) and len(calls) == 4
+
+
 def test_a_run_interrupted_after_its_first_task_resumes_with_the_others(tmp_path, monkeypatch):
     """Ctrl-C (a KeyboardInterrupt, here raised by the progress tick of the first finished task)
     keeps that task; the rerun solves only the three others and gives what an uninterrupted run
