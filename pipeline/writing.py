@@ -30,8 +30,10 @@ result's content key, as it arrives, so that a run that is killed resumes where 
 from __future__ import annotations
 
 import contextlib
+import functools
 import itertools
 import os
+import struct
 import tempfile
 import zlib
 from dataclasses import dataclass, field
@@ -110,22 +112,62 @@ def _shuffled(values, chunk: tuple[int, ...], dtype) -> np.ndarray:
 
 #: a zlib stream's header (deflate, 32 KiB window, fastest) and a final empty deflate block
 _HEADER, _LAST = b"\x78\x01", b"\x03\x00"
+#: runs of padding (values) from this length on are compressed in a stored byte plane
+_LONG_PADDING = 64
+#: deflate segments (byte-aligned, not final) that inflate to n zero bytes, by n
+_ZEROS: dict[int, bytes] = {}
 
 
-def _deflate(planes: np.ndarray, level: int, packed, padded: bool = False) -> bytes:
+def _zeros(n: int) -> bytes:
+    segment = _ZEROS.get(n)
+    if segment is None:
+        enc = zlib.compressobj(1, zlib.DEFLATED, -15)
+        segment = enc.compress(bytes(n)) + enc.flush(zlib.Z_SYNC_FLUSH)
+        if len(_ZEROS) > 1024:  # run lengths repeat from chunk to chunk; a few kinds of chunk
+            _ZEROS.clear()
+        _ZEROS[n] = segment
+    return segment
+
+
+def _stored(data: memoryview) -> list:
+    """Deflate stored blocks (not final, byte-aligned) holding ``data`` as it is."""
+    parts = []
+    for start in range(0, len(data), 65535):
+        piece = data[start:start + 65535]
+        parts += [struct.pack("<BHH", 0, len(piece), len(piece) ^ 0xFFFF), piece]
+    return parts
+
+
+@functools.lru_cache(maxsize=64)
+def _padding_runs(block: tuple[int, ...], chunk: tuple[int, ...]) -> tuple[tuple[int, int], ...] | None:
+    """``(start, stop)`` (values, in the chunk's order) of the runs of padding of at least
+    :data:`_LONG_PADDING` values in a chunk holding a block of shape ``block``; None if it is full."""
+    if tuple(block) == tuple(chunk):
+        return None
+    real = np.zeros(chunk, dtype=np.int8)
+    real[tuple(slice(0, n) for n in block)] = 1
+    edges = np.flatnonzero(np.diff(np.concatenate([[1], real.reshape(-1), [1]])))
+    return tuple((int(a), int(b)) for a, b in zip(edges[::2], edges[1::2], strict=True) if b - a >= _LONG_PADDING)
+
+
+def _deflate(planes: np.ndarray, level: int, packed, padding=None) -> bytes:
     """The zlib stream of the byte planes ``planes`` (rows) in order: the planes ``packed`` marks
     compressed at ``level``, the others stored as they are (deflate's stored blocks: random low
-    mantissa bytes do not shrink, and zlib takes most of its time trying), or, in a ``padded``
-    chunk (an edge chunk, zeros beyond the data), run-length coded (zlib's Z_RLE: the zeros shrink,
-    the random bytes are passed over quickly). Any zlib reader (HDF5's deflate filter) inflates it
-    to the same bytes as a stream compressed whole."""
+    mantissa bytes do not shrink, and zlib takes most of its time trying), but for the long runs
+    of ``padding`` (an edge chunk, zeros beyond the data: :func:`_padding_runs`), which are
+    compressed. Any zlib reader (HDF5's deflate filter) inflates it to the same bytes as a stream
+    compressed whole."""
     parts = [_HEADER]
     for plane, pack in zip(planes, packed, strict=True):
-        if pack or padded:
-            enc = zlib.compressobj(level, zlib.DEFLATED, -15, 8, zlib.Z_DEFAULT_STRATEGY if pack else zlib.Z_RLE)
-        else:
-            enc = zlib.compressobj(0, zlib.DEFLATED, -15)
-        parts += [enc.compress(plane), enc.flush(zlib.Z_SYNC_FLUSH)]
+        if pack:
+            enc = zlib.compressobj(level, zlib.DEFLATED, -15)
+            parts += [enc.compress(plane), enc.flush(zlib.Z_SYNC_FLUSH)]
+            continue
+        data, at = memoryview(plane), 0
+        for start, stop in padding or ():
+            parts += _stored(data[at:start]) + [_zeros(stop - start)]
+            at = stop
+        parts += _stored(data[at:])
     parts += [_LAST, zlib.adler32(planes).to_bytes(4, "big")]
     return b"".join(parts)
 
@@ -135,8 +177,8 @@ def encode_chunk(values, chunk: tuple[int, ...], dtype, level: int = cf.LEVEL, p
     the shuffle and deflate filters (:func:`_shuffled`, then zlib at ``level``; ``packed``: which
     byte planes are compressed, by default all)."""
     planes = _shuffled(values, chunk, dtype)
-    padded = np.shape(values) != tuple(chunk)
-    return _deflate(planes, level, packed if packed is not None else [True] * len(planes), padded)
+    padding = _padding_runs(tuple(np.shape(values)), tuple(chunk))
+    return _deflate(planes, level, packed if packed is not None else [True] * len(planes), padding)
 
 
 def _encoded(values, specs) -> list | None:
@@ -334,17 +376,17 @@ def _write_group(path, ds, group: _Group, compute_with, bar, in_flight, checksum
             if idx not in group.kept:
                 yield idx, [a.blocks[idx] for a in arrays]
 
-    def encoded(idx, values):  # in a thread beside the computation (zlib and numpy release the GIL)
+    def encode(idx, values):  # in a thread beside the computation (zlib and numpy release the GIL)
         return values, _encoded(values, [specs.get(n) for n in group.names] if group.fills_a_chunk(idx) else None)
 
     one_by_one = keep is not None  # then encoded by the writer: long blocks, few of them
-    computed = computed_blocks(tasks(), compute_with, in_flight, one_by_one, finish=None if one_by_one else encoded)
-    if one_by_one:
-        computed = ((idx, (values, None)) for idx, values in computed)
+    blocks = computed_blocks(tasks(), compute_with, in_flight, one_by_one, finish=None if one_by_one else encode)
+    computed = ((idx, (values, None)) for idx, values in blocks) if one_by_one else blocks
     arriving = itertools.chain(((idx, (values, None)) for idx, values in group.kept.items()), computed)
     first = group.indices[0]
     held: dict = {}  # blocks that arrived before the first one (whose trial decides the definition)
     with contextlib.ExitStack() as stack:
+        stack.callback(blocks.close)  # on a failure too: no more blocks started
         write = None
         if not trial:  # nothing to decide: defined before anything is computed
             write, opened, _ = _open(stack, path, ds, group, trial, held, first)

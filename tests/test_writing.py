@@ -83,15 +83,20 @@ def test_the_trial_decides_as_the_sizes_say():
 
 
 def test_a_chunk_is_encoded_as_hdf5_reads_it():
-    """The stream inflates (any zlib reader) to HDF5's shuffled bytes of the padded chunk."""
+    """The stream inflates (any zlib reader) to HDF5's shuffled bytes of the padded chunk, whichever
+    byte planes are compressed; the long runs of padding (rows of zeros beyond the block) too."""
     import zlib
 
-    block = erf(np.linspace(0.0, 2.0, 30)).reshape(5, 6)
+    block = erf(np.linspace(0.0, 2.0, 1500)).reshape(5, 300)
     for packed in ([True] * 8, [False] * 6 + [True] * 2, [False] * 8):
-        raw = zlib.decompress(writing.encode_chunk(block, (8, 6), block.dtype, 1, packed))
-        planes = np.frombuffer(raw, np.uint8).reshape(8, -1)
-        values = planes.T.copy().view(np.float64).reshape(8, 6)
-        assert np.array_equal(values[:5], block) and not values[5:].any()
+        for chunk in ((5, 300), (8, 400)):  # a full chunk; an edge chunk: 100 zeros after each row, then 1300
+            raw = zlib.decompress(writing.encode_chunk(block, chunk, block.dtype, 1, packed))
+            planes = np.frombuffer(raw, np.uint8).reshape(8, -1)
+            values = planes.T.copy().view(np.float64).reshape(chunk)
+            assert np.array_equal(values[:5, :300], block)
+            assert not values[5:].any() and not values[:, 300:].any()
+    stored = writing.encode_chunk(block, (8, 400), block.dtype, 1, [False] * 8)
+    assert len(stored) < 8 * 5 * 400  # the 1300 zeros of each plane compressed, the 100 stored
 
 
 def test_uncompressed_results_have_no_filters(tmp_path, route):
