@@ -262,7 +262,6 @@ def define(path, ds: xr.Dataset, names: list[str], compress: dict[str, bool], no
     import netCDF4
 
     with ncio.locked(), netCDF4.Dataset(path, "a") as nc:
-        nc.set_fill_off()  # every value is written: HDF5 need not fill the storage first (_FillValue stays)
         for name in names:
             var = ds[name].variable
             for dim in var.dims:
