@@ -302,10 +302,11 @@ def _target(path, ds: xr.Dataset, group: _Group, compress: dict[str, tuple | Non
     values, encoded)`` writes a block (``encoded``: its chunk as HDF5 stores it, or None; ``compress``:
     per variable, the byte planes to compress, None: not compressed), ``specs``
     per variable what the blocks' computation is to encode (:func:`_prepared`; None: nothing).
-    Through h5py where it can write chunks as they are (never both libraries on the file at once),
-    else through netCDF4."""
+    Through h5py where it can write compressed chunks as they are (never both libraries on the file
+    at once), else through netCDF4."""
     h5py = _h5py()
-    plain = h5py is None or any(ds[n].dtype.kind not in "fiu" or set(_PACKING) & set(ds[n].attrs) for n in group.names)
+    plain = (h5py is None or not any(p is not None for p in compress.values())  # nothing to compress: netCDF4
+             or any(ds[n].dtype.kind not in "fiu" or set(_PACKING) & set(ds[n].attrs) for n in group.names))
     if not plain:
         with ncio.locked():
             f = h5py.File(path, "r+")
