@@ -7,8 +7,9 @@
   chunks of at most :data:`CHUNK_BYTES` split along its leading (sweep) dimensions, its trailing
   dimension (q, stress levels, ...) kept whole where it fits.
 
-Compression costs write time (zlib runs in the writing process only): a scene can turn it off
-with ``[run] compress = false`` (the values are the same either way).
+A dask-computed variable is compressed only if a trial block shrinks enough, its chunks encoded
+beside the computation (:mod:`roughcontact.writing`); a scene can turn compression off with
+``[run] compress = false`` (the values are the same either way).
 
 Used by :func:`roughcontact.store.write` for both its paths (xarray's ``to_netcdf`` and the
 netCDF4 variables the block writer fills).

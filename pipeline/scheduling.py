@@ -1,16 +1,12 @@
-"""Chunking, scheduling and the block writer.
+"""Chunking and scheduling: how a result's blocks are cut and where they are computed.
 
 * :func:`auto_chunks` picks dask chunk sizes for a scene's sweep dimensions so that one chunk's
   working memory stays near a budget (explicit sizes from the scene win).
 * :func:`scheduler` turns the scene's / command line's scheduler setting into something dask
   can compute with: 'threads', 'processes', 'synchronous' or a dask.distributed client.
-* :func:`write_blocks` fills the dask-backed variables of a NetCDF file block by block: the
-  blocks are computed by the scheduler (on a cluster's workers, say) and written by *this*
-  process only, a bounded number in flight, so a sweep never has to fit in memory and no worker
-  ever writes to the file.
-* :class:`KeptBlocks`: for a stage whose blocks are long work (``Shape(keep_blocks=True)``, the
-  validation's BEM tasks), every finished block is also saved in the output folder under the
-  result's content key, as it arrives, so that a run that is killed resumes where it stopped.
+* :func:`computed_blocks` computes the blocks of a result on that scheduler, a bounded number
+  in flight (a sweep never has to fit in memory), and hands them to the writer of this process
+  (:mod:`roughcontact.writing`), computing the next ones meanwhile: no worker ever writes to the file.
 * :func:`quiet_libraries`: dask's warnings about chunks and graphs (the engine's choices, nothing
   the user can act on) kept out of the user's output.
 """
@@ -21,17 +17,12 @@ import contextlib
 import itertools
 import math
 import os
-import tempfile
 import warnings
-from pathlib import Path
 from typing import Iterator, Mapping
 
-import numpy as np
 import xarray as xr
 
-from . import ncio
 from .errors import UserError
-from .progress import Tick
 
 
 def auto_chunks(sizes: Mapping[str, int], budget_points: int,
@@ -134,47 +125,6 @@ def quiet_libraries() -> Iterator[None]:
         yield
 
 
-class KeptBlocks:
-    """The finished blocks of one result being written, kept in ``folder`` (one ``.npz`` per
-    block, named by the block's dimensions and index ranges, written atomically) so that a run
-    that is killed resumes: the next run with the same content key reads them instead of
-    computing them. The folder is the result's (:func:`roughcontact.store.kept_blocks_folder`),
-    its name holds the key; the store removes it once the result is written."""
-
-    def __init__(self, folder: Path, tmp_prefix: str = ".tmp-"):
-        self.folder = Path(folder)
-        self.tmp_prefix = tmp_prefix  # the store's: its clean-up removes what a kill leaves
-
-    def _file(self, dims, region) -> Path:
-        where = "_".join(f"{s.start}-{s.stop}" for s in region)
-        return self.folder / f"{'.'.join(dims) or 'scalar'}@{where or '0'}.npz"
-
-    def load(self, dims, names, region) -> list[np.ndarray] | None:
-        """The block's values per variable of ``names``, or None if not kept (or unreadable)."""
-        path = self._file(dims, region)
-        if not path.is_file():
-            return None
-        shape = tuple(s.stop - s.start for s in region)
-        try:
-            with np.load(path, allow_pickle=False) as kept:
-                values = [kept[name] for name in names]
-        except (OSError, KeyError, ValueError, EOFError):
-            return None
-        return values if all(v.shape == shape for v in values) else None
-
-    def save(self, dims, names, region, values) -> None:
-        """Keep a block: a temporary in the folder, then a rename (a kill leaves no half block)."""
-        self.folder.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=self.tmp_prefix, suffix=".npz", dir=self.folder)
-        try:
-            with os.fdopen(fd, "wb") as fh:
-                np.savez(fh, **{name: np.asarray(v) for name, v in zip(names, values, strict=True)})
-            os.replace(tmp, self._file(dims, region))
-        except BaseException:
-            Path(tmp).unlink(missing_ok=True)
-            raise
-
-
 def _compute_block(arrays: bytes) -> tuple:
     """Run on a worker: the pickled dask arrays of one block, computed together in this thread."""
     import pickle
@@ -242,100 +192,102 @@ def _as_completed(tasks: Mapping[tuple, list], compute_with, client, pool, worke
         executor.shutdown(wait=False, cancel_futures=True)
 
 
-def dask_variables(ds: xr.Dataset) -> list[str]:
-    return [name for name, v in ds.variables.items() if v.chunks is not None]
-
-
-def _region(offsets, idx) -> tuple[slice, ...]:
-    """The slices of block ``idx`` (one index per dimension) given each dimension's chunk offsets."""
-    return tuple(slice(int(o[i]), int(o[i + 1])) for o, i in zip(offsets, idx, strict=True))
-
-
-def _in_batches(indices, arrays, compute_with, client, pool, in_flight: int):
-    """Yield ``(idx, values)`` for every block, ``in_flight`` blocks computed together (work they
-    share is done once)."""
-    import dask
-
-    todo = iter(indices)
-    while batch := list(itertools.islice(todo, in_flight)):
-        tasks = [[a.blocks[idx] for a in arrays] for idx in batch]
-        if client is not None:
-            results = client.gather(client.compute(tasks))
-        elif pool is not None:
-            results = dask.compute(*tasks, scheduler="processes", pool=pool)
-        else:
-            results = dask.compute(*tasks, scheduler=compute_with)
-        yield from zip(batch, results, strict=True)
-
-
-def _groups(ds: xr.Dataset, names: list[str], keep: KeptBlocks | None) -> list[tuple]:
-    """Per group of variables with the same dimensions and chunks: (dims, names, chunk offsets,
-    block indices, {index: values} of the blocks ``keep`` holds)."""
-    groups: dict[tuple, list[str]] = {}
-    for name in names:
-        var = ds[name].variable
-        groups.setdefault((var.dims, var.chunks), []).append(name)
-    out = []
-    for (dims, chunks), group in groups.items():
-        offsets = [np.concatenate([[0], np.cumsum(c)]) for c in chunks]
-        indices = list(itertools.product(*(range(len(c)) for c in chunks)))
-        kept = {}
-        for idx in indices if keep is not None else ():
-            values = keep.load(dims, group, _region(offsets, idx))
-            if values is not None:
-                kept[idx] = values
-        out.append((dims, group, offsets, indices, kept))
-    return out
-
-
-def write_blocks(path, ds: xr.Dataset, names: list[str], compute_with, progress=None,
-                 in_flight: int | None = None, checksums=None, keep: KeptBlocks | None = None) -> None:
-    """Compute the dask variables ``names`` of ``ds`` block by block and write them into the
-    existing NetCDF file ``path`` (whose other variables are already written); ``progress`` (a
-    :class:`roughcontact.progress.Reporter`) shows the blocks written.
-
-    Variables with the same dimensions and chunks are computed together, so that work they share
-    (an integral over q, say) is done once per block.
-
-    With ``keep`` (:class:`KeptBlocks`), the blocks it holds are written without computing them,
-    and every other block is computed on its own and kept as soon as it finishes (then written),
-    so that a run killed at any moment loses at most the blocks being computed.
-    """
-    import dask  # imported here: a run with nothing to compute never needs it
-
-    plans = _groups(ds, names, keep)
-    total = sum(len(p[3]) for p in plans)
-    done_before = sum(len(p[4]) for p in plans)
-    if progress is not None and done_before:
-        progress.note(f"    {done_before} of {total} blocks kept from an interrupted run: computing the other "
-                      f"{total - done_before}")
-    bar = progress.bar("writing", total, unit="block", initial=done_before) if progress is not None else Tick()
+def resources(compute_with) -> tuple[object, object, int]:
+    """``(client, pool, workers)`` of what :func:`scheduler` yields: the distributed Client or None,
+    the process pool or None, and how many blocks can be computed at once."""
     from concurrent.futures import Executor
+
+    import dask
 
     pool = compute_with if isinstance(compute_with, Executor) else None
     client = compute_with if not isinstance(compute_with, str) and pool is None else None
     workers = len(client.scheduler_info()["workers"]) if client is not None else (dask.system.CPU_COUNT or 2)
+    return client, pool, workers
+
+
+def computed_blocks(tasks, compute_with, in_flight: int | None = None, one_by_one: bool = False, finish=None):
+    """Yield ``(idx, values)`` for every ``(idx, task)`` of ``tasks`` (a task: the list of dask objects
+    of one block; ``tasks`` is read lazily).
+
+    ``one_by_one``: every block computed on its own graph, several at a time, yielded as each
+    finishes (:class:`roughcontact.writing.KeptBlocks`: long blocks, each kept as it arrives).
+    Otherwise ``in_flight`` blocks at a time are computed together (work they share is done once)
+    and yielded in order, ``finish(idx, values)`` (if given) applied to each in threads, what it
+    returns yielded instead of the values; the next batch is computed in the background while the
+    caller handles the blocks of this one (writing overlaps computing)."""
+    client, pool, workers = resources(compute_with)
+    if one_by_one:
+        return _as_completed(dict(tasks), compute_with, client, pool, workers)
     if in_flight is None:
         in_flight = max(2, 2 * workers)
-    with ncio.dataset(path, "a") as nc:  # every call into netCDF/HDF5 under the process-wide lock (ncio)
-        for dims, group, offsets, indices, kept in plans:
-            with ncio.locked():
-                targets = [nc.variables[name] for name in group]
-            arrays = [ds[name].data for name in group]
-            if keep is None:
-                arriving = _in_batches(indices, arrays, compute_with, client, pool, in_flight)
+    return _ahead(_in_batches(tasks, compute_with, client, pool, in_flight, finish, workers))
+
+
+def _in_batches(tasks, compute_with, client, pool, in_flight: int, finish=None, workers: int = 2):
+    """Yield the list of ``(idx, values)`` of every ``in_flight`` blocks of ``tasks``, computed
+    together (then ``finish``-ed, in ``workers`` threads)."""
+    import dask
+
+    todo = iter(tasks)
+    threads = None
+    try:
+        while batch := list(itertools.islice(todo, in_flight)):
+            work = [task for _, task in batch]
+            if client is not None:
+                results = client.gather(client.compute(work))
+            elif pool is not None:
+                results = dask.compute(*work, scheduler="processes", pool=pool)
             else:
-                tasks = {idx: [a.blocks[idx] for a in arrays] for idx in indices if idx not in kept}
-                arriving = itertools.chain(kept.items(), _as_completed(tasks, compute_with, client, pool, workers))
-            for idx, values in arriving:
-                sl = _region(offsets, idx)
-                if keep is not None and idx not in kept:
-                    keep.save(dims, group, sl, values)
-                with ncio.locked():
-                    for target, value in zip(targets, values, strict=True):
-                        target[sl] = np.asarray(value)
-                if checksums is not None:
-                    for name, value in zip(group, values, strict=True):
-                        checksums.add(name, np.asarray(value), [s.start for s in sl])
-                if idx not in kept:
-                    bar()
+                results = dask.compute(*work, scheduler=compute_with)
+            indices = [idx for idx, _ in batch]
+            if finish is not None:
+                if threads is None:
+                    from concurrent.futures import ThreadPoolExecutor
+
+                    threads = ThreadPoolExecutor(max(1, workers), thread_name_prefix="roughcontact-finish")
+                results = list(threads.map(finish, indices, results))
+            yield list(zip(indices, results, strict=True))
+    finally:
+        if threads is not None:
+            threads.shutdown(wait=False, cancel_futures=True)
+
+
+def _ahead(batches):
+    """Yield the items of the batches of the generator ``batches``, the next batch made in a
+    background thread meanwhile (never more than that one: two batches in memory at most). When
+    the caller stops (an error, an interrupt), no batch is started after the one being made
+    (which finishes on its own, its values dropped)."""
+    import queue
+    import threading
+
+    ready: queue.Queue = queue.Queue()
+    turn = threading.Semaphore(1)  # the producer may make one batch beyond the caller's
+    stop = threading.Event()
+
+    def make():
+        try:
+            while True:
+                turn.acquire()
+                if stop.is_set():
+                    return
+                batch = next(batches, None)
+                ready.put((batch, None))
+                if batch is None:
+                    return
+        except BaseException as exc:  # handed to the caller, raised there
+            ready.put((None, exc))
+
+    thread = threading.Thread(target=make, name="roughcontact-batches", daemon=True)
+    thread.start()
+    try:
+        while True:
+            batch, error = ready.get()
+            if error is not None:
+                raise error
+            if batch is None:
+                return
+            turn.release()
+            yield from batch
+    finally:
+        stop.set()
+        turn.release()

@@ -29,7 +29,7 @@ from .version import __version__
 
 TMP_PREFIX = ".tmp-"
 #: folder (beside a result) of the finished blocks of results being written
-#: (:class:`roughcontact.scheduling.KeptBlocks`)
+#: (:class:`roughcontact.writing.KeptBlocks`)
 BLOCKS = ".blocks"
 
 
@@ -169,9 +169,9 @@ def write(ds: xr.Dataset, path: Path, compute_with="threads", progress=None, com
     """Write ``ds`` to ``path`` atomically: a temporary file in the same folder, then a rename.
 
     Dask-backed variables are computed block by block by ``compute_with`` (a dask scheduler
-    name or a distributed Client) and written from this process (:func:`roughcontact.scheduling.write_blocks`),
+    name or a distributed Client) and written from this process (:func:`roughcontact.writing.write_blocks`),
     so a result never has to fit in memory (``progress``: a :class:`roughcontact.progress.Reporter`
-    showing the blocks written; ``compress``: large variables zlib-compressed, :mod:`roughcontact.cf`).
+    showing the blocks written; ``compress``: large variables zlib-compressed where it pays, :mod:`roughcontact.cf`).
     A crash or kill while writing leaves at most a
     ``.tmp-*`` file, which is never read as a result (and is removed by :func:`clean_temporaries`).
     The file gets a checksum of its data and attributes (:mod:`roughcontact.integrity`). A file
@@ -184,7 +184,7 @@ def write(ds: xr.Dataset, path: Path, compute_with="threads", progress=None, com
     the blocks not kept. Kept blocks of the same result under another key (an older scene) are
     removed when it is written.
     """
-    from .scheduling import KeptBlocks, dask_variables, write_blocks
+    from .writing import KeptBlocks, dask_variables, write_blocks
 
     path = Path(path)
     key = ds.attrs.get("stage_key")
@@ -205,8 +205,7 @@ def write(ds: xr.Dataset, path: Path, compute_with="threads", progress=None, com
             _write_in_memory(eager, tmp, cf.encoding(eager, compress))
         sums = integrity.Checksums({name: ds[name].variable.chunks for name in lazy})
         if lazy:
-            _define(tmp, ds, lazy, compress)
-            write_blocks(tmp, ds, lazy, compute_with, progress, checksums=sums, keep=keep)
+            write_blocks(tmp, ds, lazy, compute_with, progress, checksums=sums, keep=keep, compress=compress)
         integrity.stamp(tmp, sums.known())
         with open(tmp, "rb+") as fh:
             os.fsync(fh.fileno())
@@ -298,25 +297,6 @@ def _why(exc: BaseException, path: Path) -> str:
     except OSError:
         return text
     return f"{text}; the disk had {free / 1e6:.3g} MB free when it failed" if free < 2**30 else text
-
-
-def _define(path, ds: xr.Dataset, names: list[str], compress: bool = True) -> None:
-    """Declare the lazily computed variables in the file, with their attributes."""
-    import netCDF4
-
-    with ncio.locked(), netCDF4.Dataset(path, "a") as nc:
-        for name in names:
-            var = ds[name].variable
-            for dim in var.dims:
-                if dim not in nc.dimensions:
-                    nc.createDimension(dim, ds.sizes[dim])
-            target = nc.createVariable(name, var.dtype, var.dims, **cf.lazy_variable(ds, name, compress))
-            target.setncatts(dict(var.attrs))
-        coords = [n for n in names if n in ds.coords and n not in ds.dims]
-        for name in ds.data_vars:
-            extra = [c for c in coords if set(ds[c].dims) <= set(ds[name].dims)]
-            if extra and name in nc.variables:
-                nc.variables[name].setncattr("coordinates", " ".join(extra))
 
 
 def clean_temporaries(folder: Path) -> None:

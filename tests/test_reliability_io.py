@@ -163,11 +163,11 @@ def test_a_full_disk_names_the_file_and_keeps_nothing_of_it(tmp_path, capsys, mo
     out = tmp_path / "out"
     assert main(["run", str(path), "--outdir", str(out), "--quiet"]) == 0
     before = {f: (out / f).read_bytes() for f in ("psd.nc", "contact.nc")}
-    import roughcontact.scheduling
     import roughcontact.store
+    import roughcontact.writing
 
     if where == "block writes":
-        monkeypatch.setattr(roughcontact.scheduling, "write_blocks", _enospc)
+        monkeypatch.setattr(roughcontact.writing, "write_blocks", _enospc)
     else:
         monkeypatch.setattr(roughcontact.store, "_write_in_memory", _hdf_error)  # the in-memory variables' write
     capsys.readouterr()
