@@ -5,8 +5,9 @@ compared with the theory that uses the same E_eff(q).
 Facts checked: a layer of the substrate's own material is the half-space, and Tamaas' half-space
 solution is reproduced to 1e-8; a vanishing layer is the bare substrate and a thick one (d qL >> 1)
 the layer's half-space; a thin soft layer gives an area between the two half-spaces; through the
-stage, the theory columns are the contact and separation stages' (which take E_eff), the solver is recorded, a coating of the substrate's material gives the homogeneous scene's
-results, the homogeneous path is Tamaas' solve bit for bit, and the stages that share the BEM's
+stage, the theory columns are the contact and separation stages' (which take E_eff), the solver
+is recorded, a coating of the substrate's material gives the homogeneous scene's results, the
+homogeneous path is Tamaas' solve bit for bit, and the stages that share the BEM's
 check without a layered kernel still refuse a coating before anything is written.
 """
 
