@@ -40,6 +40,7 @@ from roughcontact.stage import (
 )
 
 from .figures.bem import figure_bem_comparison, figure_bem_elastoplastic, figure_bem_reduced_pressure
+from .figures.bem_coating import figure_bem_coating
 from .figures.bem_fields import field_figures
 from .shared.bem_fields import FIELD_KEYS, MAPS as FIELD_MAPS, PARAMS as FIELD_PARAMS, Fields, with_fields
 from .shared.maps import check_eta, map_band, map_surfaces, measured_maps, topography_files
@@ -581,8 +582,10 @@ register(
                  Figure("bem_elastoplastic", "A_el/A0 and A_pl/A0, theory vs saturated BEM, against p/sigma_Y",
                         ("bem",), figure_bem_elastoplastic,
                         outputs=tuple(n for n in PLASTIC if n not in PLASTIC_REALIZATIONS)),
+                 Figure("bem_coating", "coated solids: A/A0 and theory / BEM against the coating thickness d qL",
+                        ("bem",), figure_bem_coating),
                  *field_figures("bem")),
-        doc="Exact FFT-BEM contact (tamaas) on synthesized or measured surface pairs, compared with the theory at "
-            "the same band.",
+        doc="Exact FFT-BEM contact (tamaas; a coated solid: Polonsky-Keer with the layered kernel) on synthesized or "
+            "measured surface pairs, compared with the theory at the same band.",
     )
 )
