@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .bem import _flat_contact, _reduce, _results
+from .bem import flat_contact, new_results, reduce_solution
 from .bem_cg import solve
 from .layered import surface_compliance
 
@@ -107,17 +107,17 @@ def coated_contact_pair(h1, h2, pixel_size, layer, pressures, *, tolerance=1e-10
     nb = 0 if stress_edges is None else np.shape(stress_edges)[-1] - 1
     surface = (heights - heights.mean()) / pixel_size
     if np.ptp(surface) == 0.0:
-        return _flat_contact(pressures, stress_edges, nb, shape if fields else None)
+        return flat_contact(pressures, stress_edges, nb, shape if fields else None)
     E_unit = float(layer[3]) / (1.0 - float(layer[4]) ** 2)  # the substrate's E*
     kernel = layered_kernel(layer, pixel_size, E_unit)
-    out = _results(pressures.size, nb, shape if fields else None)
+    out = new_results(pressures.size, nb, shape if fields else None)
     previous = None
     for i, p in enumerate(pressures):
         res = solve(surface, 1.0, kernel, p / E_unit, tolerance=tolerance, initial=previous)
         previous = res["pressure"]
         traction = res["pressure"] * E_unit
         gap = (res["displacement"] - surface) * pixel_size
-        _reduce(out, i, traction, gap, None if stress_edges is None else stress_edges[i])
+        reduce_solution(out, i, traction, gap, None if stress_edges is None else stress_edges[i])
         if progress is not None:
             progress(1)
     return out
