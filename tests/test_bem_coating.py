@@ -155,3 +155,17 @@ def test_interface_bem_still_refuses_a_coating(run_scene, tmp_path):
         run_scene(raw, outdir=tmp_path / "c")
     assert not any((tmp_path / "c").rglob("*.nc"))
 
+
+
+def test_the_saturated_solve_takes_the_layered_kernel_too(run_scene, tmp_path):
+    """A hardness far above every local pressure: the saturated BEM of the coated solid finds the
+    elastic coated BEM's contact area (both with the layered kernel; with the half-space's it would
+    find the bare substrate's, less)."""
+    raw = small_scene(SOFT, outputs=("bem_contact_area_ratio", "bem_elastic_contact_area_ratio_mean",
+                                     "bem_plastic_contact_area_ratio_mean"))
+    raw["contact"] = {**raw["contact"], "yield_stress": "1e6 GPa"}
+    bem = run_scene(raw, outdir=tmp_path / "a")["base"]["bem"]
+    assert np.all(bem["bem_plastic_contact_area_ratio_mean"].values == 0)
+    np.testing.assert_allclose(bem["bem_elastic_contact_area_ratio_mean"].values,
+                               bem["bem_contact_area_ratio_mean"].values, rtol=0, atol=1e-12)
+    assert "E_eff" in bem["bem_elastic_contact_area_ratio_mean"].attrs["bem_solver"]
