@@ -47,7 +47,7 @@ def tamaas_module():
     return tamaas
 
 
-def _results(n, nb, shape=None):
+def new_results(n, nb, shape=None):
     """Zeroed result arrays for ``n`` pressures, ``nb`` histogram bins and gap maps of ``shape``."""
     out = {"area": np.zeros(n), "mean_gap": np.zeros(n), "histogram": np.zeros((n, nb)), "overflow": np.zeros(n)}
     if shape is not None:
@@ -56,11 +56,11 @@ def _results(n, nb, shape=None):
     return out
 
 
-def _flat_contact(pressures, stress_edges, nb, shape=None):
+def flat_contact(pressures, stress_edges, nb, shape=None):
     """A flat composite (e.g. identical surfaces with eta = 1): full contact at any pressure,
     the local pressure everywhere equal to p (a delta in the histogram); zero gap maps and
     pressure maps equal to p of ``shape`` when asked for."""
-    out = _results(pressures.size, nb, shape)
+    out = new_results(pressures.size, nb, shape)
     out["area"][:] = 1.0
     for i, p in enumerate(pressures):
         if shape is not None:
@@ -134,8 +134,8 @@ def solve_contact(heights, pixel_size, E_star, pressures, *, tolerance=1e-10, st
     nb = 0 if stress_edges is None else np.shape(stress_edges)[-1] - 1
     surface = (heights - heights.mean()) / pixel_size
     if np.ptp(surface) == 0.0:
-        return _flat_contact(pressures, stress_edges, nb, (nx, ny) if fields else None)
-    out = _results(pressures.size, nb, (nx, ny) if fields else None)
+        return flat_contact(pressures, stress_edges, nb, (nx, ny) if fields else None)
+    out = new_results(pressures.size, nb, (nx, ny) if fields else None)
     tm = tamaas_module()
     model, solver = _pkr(tm, surface, tolerance)
     for i, p in enumerate(pressures):
@@ -151,7 +151,7 @@ def solve_contact(heights, pixel_size, E_star, pressures, *, tolerance=1e-10, st
                 model, solver = _pkr(tm, surface, tolerance)
         traction = np.array(model.traction, copy=True).reshape(nx, ny) * E_star
         gap = (np.array(model.displacement, copy=True).reshape(nx, ny) - surface) * pixel_size
-        _reduce(out, i, traction, gap, None if stress_edges is None else stress_edges[i])
+        reduce_solution(out, i, traction, gap, None if stress_edges is None else stress_edges[i])
         if progress is not None:
             progress(1)
     return out
@@ -167,7 +167,7 @@ def _pkr(tm, surface, tolerance):
     return model, tm.PolonskyKeerRey(model, np.ascontiguousarray(surface), float(tolerance))
 
 
-def _reduce(out, i, traction, gap, edges):
+def reduce_solution(out, i, traction, gap, edges):
     """Store the solution at pressure index ``i``: contact fraction, mean gap (m), the
     histogram of the local pressure (Pa) on ``edges`` and, if ``out`` has them, the gap and
     pressure maps."""

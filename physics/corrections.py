@@ -241,7 +241,7 @@ def corrected_area(x0, correction: str, gamma):
 VARIANTS = {"persson": "none", "yang_persson": "yang_persson", "wang_mueser": "wang_mueser"}
 
 
-def variant_theory(q, C, q_upper, p, E_star, variant: str, gamma=None, alpha=0.45, numerics=None):
+def variant_theory(q, C, q_upper, p, E_star, variant: str, gamma=None, alpha=0.45, numerics=None, layer=None):
     """A/A0 and the mean separation u of one theory variant at one magnification.
 
     Parameters
@@ -265,6 +265,9 @@ def variant_theory(q, C, q_upper, p, E_star, variant: str, gamma=None, alpha=0.4
     numerics : dict, optional
         ``panels_per_decade``, ``order``, ``depth`` of
         :func:`roughcontact.physics.separation.separation_nodes`.
+    layer : tuple, optional
+        (thickness in m, E_layer in Pa, nu_layer, E_sub in Pa, nu_sub) of a coated solid (E_eff(q)
+        in G and in the elastic energy; E_star is then the substrate's); None: a half-space.
 
     Returns
     -------
@@ -278,9 +281,9 @@ def variant_theory(q, C, q_upper, p, E_star, variant: str, gamma=None, alpha=0.4
     gamma = DEFAULT_GAMMA[variant] if gamma is None else gamma
     p = np.atleast_1d(np.asarray(p, dtype=float))
     upper = np.atleast_1d(float(q_upper))
-    G = float(persson_G(q, C, upper, E_star)[0])
+    G = float(persson_G(q, C, upper, E_star, layer=layer)[0])
     area = contact_area_ratio(p, corrected_G(p, G, variant, gamma))
-    s, weight, count, _, s_tail, q_tail = separation_nodes(q, C, upper, **(numerics or {}))
+    s, weight, count, _, s_tail, q_tail = separation_nodes(q, C, upper, **(numerics or {}), layer=layer)
     u = mean_separation(p, s, weight, count, s_tail, q_tail, E_star=E_star,
                         alpha=alpha if variant == "persson" else gamma, refinement=VARIANTS[variant])
     return area, u[:, 0]

@@ -3,8 +3,9 @@ compared with the ``contact`` and ``separation`` stages at the same magnificatio
 
 Kernels: :mod:`roughcontact.physics.synthesis` (random pairs with the psd stage's spectra and
 coherence, seed eqs 4, 41, 52; the band limit of a measured map), :mod:`roughcontact.physics.bem`
-(the Tamaas solver, an optional dependency) and :mod:`roughcontact.physics.estimators` (rms
-slope of a map). The measured maps (``bem.surfaces``) are checked by
+(the Tamaas solver, an optional dependency), :mod:`roughcontact.physics.bem_coated` (a coated
+solid: the Polonsky-Keer solver with the layered surface compliance, material.coating_*) and
+:mod:`roughcontact.physics.estimators` (rms slope of a map). The measured maps (``bem.surfaces``) are checked by
 :mod:`roughcontact.stages.shared.maps`. Figure: :mod:`roughcontact.stages.figures.bem`.
 
 The comparison uses one band on both sides: roughness on qL <= |q| <= q_cut on an N x N
@@ -19,7 +20,9 @@ import xarray as xr
 
 from roughcontact.physics.bem import SolverMissing, SubPixelContact, contact_pair, tamaas_module
 from roughcontact.physics.bem_cg import NoConvergence, saturated_areas
+from roughcontact.physics.bem_coated import coated_contact_pair
 from roughcontact.physics.estimators import rms_slope_of_map
+from roughcontact.physics.layered import surface_compliance
 from roughcontact.physics.plasticity import elastoplastic_areas
 from roughcontact.physics.synthesis import band_limit, grid_band, synthesize_pair, white_noise_pair
 from roughcontact.stage import (
@@ -37,10 +40,19 @@ from roughcontact.stage import (
 )
 
 from .figures.bem import figure_bem_comparison, figure_bem_elastoplastic, figure_bem_reduced_pressure
+from .figures.bem_coating import figure_bem_coating
 from .figures.bem_fields import field_figures
 from .shared.bem_fields import FIELD_KEYS, MAPS as FIELD_MAPS, PARAMS as FIELD_PARAMS, Fields, with_fields
 from .shared.maps import check_eta, map_band, map_surfaces, measured_maps, topography_files
-from .shared.material import COATING_KEYS, E_STAR, MATERIAL_KEYS, e_star, refuse_coating
+from .shared.material import (
+    COATING_KEYS,
+    E_STAR,
+    MATERIAL_KEYS,
+    coating_attrs,
+    coating_layer,
+    e_star,
+    refuse_coating,
+)
 from .shared.surfaces import MAP_KEYS, surface_reads
 from .shared.variants import THEORY, VARIANT_KEYS, VARIANTS, theory_variants, variant_attrs
 
@@ -94,10 +106,17 @@ def solver():
         raise _missing(exc) from None
 
 
-def solve_pair(h1, h2, pixel_size, E_star, pressures, **kwargs):
-    """:func:`roughcontact.physics.bem.contact_pair`, its failures as the user's errors."""
+def solve_pair(h1, h2, pixel_size, E_star, pressures, layer=None, **kwargs):
+    """:func:`roughcontact.physics.bem.contact_pair` (Tamaas, the half-space), or with a coating
+    ``layer`` :func:`roughcontact.physics.bem_coated.coated_contact_pair` (the layered kernel; E_star
+    unused), their failures as the user's errors."""
     try:
+        if layer is not None:
+            return coated_contact_pair(h1, h2, pixel_size, layer, pressures, **kwargs)
         return contact_pair(h1, h2, pixel_size, E_star, pressures, **kwargs)
+    except NoConvergence as exc:
+        raise UserError(f"the BEM of the coated solid did not converge ({exc}); use a larger "
+                        "numerics.bem_tolerance", key="numerics.bem_tolerance") from None
     except SolverMissing as exc:
         raise _missing(exc) from None
     except SubPixelContact as exc:
@@ -136,9 +155,11 @@ def single_surfaces(sizes) -> None:
 
 
 def check_bem(inp: StageInput) -> None:
-    """The optional dependency, usable measured maps, no coating (Tamaas' kernel is the half-space's), and a
-    hardness for the elastoplastic outputs."""
-    refuse_coating(inp, "the BEM (its surface kernel is the homogeneous half-space's)")
+    """The optional dependency, usable measured maps, a hardness for the elastoplastic outputs; a
+    coating only for the bem stage itself (it solves the coated solid with the layered kernel; the
+    stages that share this check take a homogeneous solid)."""
+    if inp.stage != "bem":
+        refuse_coating(inp, f"the {inp.stage} stage (its surface kernel is the homogeneous half-space's)")
     solver()
     asked = sorted(set(PLASTIC) & inp.wanted)
     if asked and inp["contact.yield_stress"] is None:
@@ -277,8 +298,9 @@ def _solve_all(inp, band, q, C1, C2, E_star, p_values, eta_values, edges, fields
         out["hrms"][j, r] = float(np.std(h1 - h2))
         out["slope"][j, r] = rms_slope_of_map(h1 - h2, dx)
         keep = fields is not None and fields.wants(r)
-        res = solve_pair(h1, h2, dx, E_star, p_values[order], tolerance=inp["numerics.bem_tolerance"],
-                         stress_edges=edges[order, j], progress=tick, fields=keep)
+        res = solve_pair(h1, h2, dx, E_star, p_values[order], layer=coating_layer(inp),
+                         tolerance=inp["numerics.bem_tolerance"], stress_edges=edges[order, j], progress=tick,
+                         fields=keep)
         for k in ("area", "mean_gap", "histogram", "overflow"):
             out[k][order, j, r] = res[k]
         if keep:
@@ -298,8 +320,16 @@ def _on(da: xr.DataArray, p_values, eta_values, has_eta) -> np.ndarray:
 def _describe(inp: StageInput, ds: xr.Dataset, band: dict) -> None:
     """The text attributes: solver, surfaces, grid mapping, and how the maps were made."""
     measured = band["maps"] is not None
+    tolerance = inp["numerics.bem_tolerance"]
+    if coating_layer(inp) is None:
+        method = f"tamaas {solver().__version__} PolonskyKeerRey, tolerance {tolerance:g}"
+    else:
+        method = (f"roughcontact.physics.bem_coated: Polonsky-Keer constrained conjugate gradients (physics/bem_cg.py) "
+                  f"with the coated solid's surface compliance 2 / (q E_eff(q)) (physics/layered.py), tolerance "
+                  f"{tolerance:g}")
+    ds.attrs.update(coating_attrs(inp))
     ds.attrs.update({
-        "bem_solver": f"tamaas {solver().__version__} PolonskyKeerRey, tolerance {inp['numerics.bem_tolerance']:g}",
+        "bem_solver": method,
         "bem_surfaces": "measured" if measured else "synthesized",
         "bem_grid_mapping": f"map side L = {'the measured maps side' if measured else '2 pi / qL'} = "
                             f"{band['L']:.6g} m, {band['n']} x {band['n']} pixels of dx = {band['dx']:.6g} m; "
@@ -391,20 +421,23 @@ def _with_hardness(inp, ds, band, q, C1, C2, E_star, p_values, eta_values, G_pe)
     and the theory's (two absorbing walls, physics/plasticity.py) at the BEM's magnification."""
     Y = float(inp["contact.yield_stress"])
     R = band["R"]
+    layer = coating_layer(inp)
+    compliance = None if layer is None else (lambda k: surface_compliance(k, *layer))
     shape = (p_values.size, eta_values.size, R)
     el, pl = np.empty(shape), np.empty(shape)
     tick = inp.progress("BEM elastoplastic solves",
                         total=p_values.size * (1 if band["maps"] is not None else R * eta_values.size), unit="solve")
     for j, r, h1, h2 in map_pairs(band, q, C1, C2, eta_values):
         try:
-            res = saturated_areas(h1 - h2, band["dx"], E_star, p_values, Y, tolerance=inp["numerics.bem_tolerance"],
-                                  progress=tick)
+            res = saturated_areas(h1 - h2, band["dx"], E_star, p_values, Y, compliance=compliance,
+                                  tolerance=inp["numerics.bem_tolerance"], progress=tick)
         except NoConvergence as exc:
             raise UserError(f"the saturated BEM did not converge ({exc}); use a larger numerics.bem_tolerance",
                             key="numerics.bem_tolerance") from None
         el[:, j, r], pl[:, j, r] = res["elastic_area"], res["plastic_area"]
     attrs = {"yield_stress_Pa": Y, "bem_solver": "roughcontact.physics.bem_cg, Polonsky-Keer with the pressure "
-             "bounded by yield_stress (Kato's saturated contact)"}
+             "bounded by yield_stress (Kato's saturated contact)"
+             + ("" if layer is None else ", the coated solid's surface compliance 2 / (q E_eff(q))")}
     dims = ("p", "eta", "realization")
     t_el, t_pl = elastoplastic_areas(p_values[:, None], np.asarray(G_pe)[None, :], Y)
     values = {"bem_elastic_contact_area_ratio": el, "bem_plastic_contact_area_ratio": pl}
@@ -425,7 +458,7 @@ def _with_variants(inp, ds, psd, q, zeta_bem, p_values, has_eta, E_star) -> xr.D
     its ratio to the BEM, over (p, eta, theory)."""
     C = psd["psd_combined"]
     rows = C.transpose("eta", "q").values if has_eta else np.atleast_2d(C.values)
-    area, gap = theory_variants(inp, q, rows, zeta_bem * q[0], p_values, E_star)
+    area, gap = theory_variants(inp, q, rows, zeta_bem * q[0], p_values, E_star, layer=coating_layer(inp))
     dims = ("p", "eta", "theory")
     ds = ds.assign_coords(theory=list(VARIANTS))
     ds["theory_variant_contact_area_ratio"] = (dims, area)
@@ -549,8 +582,10 @@ register(
                  Figure("bem_elastoplastic", "A_el/A0 and A_pl/A0, theory vs saturated BEM, against p/sigma_Y",
                         ("bem",), figure_bem_elastoplastic,
                         outputs=tuple(n for n in PLASTIC if n not in PLASTIC_REALIZATIONS)),
+                 Figure("bem_coating", "coated solids: A/A0 and theory / BEM against the coating thickness d qL",
+                        ("bem",), figure_bem_coating),
                  *field_figures("bem")),
-        doc="Exact FFT-BEM contact (tamaas) on synthesized or measured surface pairs, compared with the theory at "
-            "the same band.",
+        doc="Exact FFT-BEM contact (tamaas; a coated solid: Polonsky-Keer with the layered kernel) on synthesized or "
+            "measured surface pairs, compared with the theory at the same band.",
     )
 )

@@ -42,6 +42,7 @@ REDUCED = {
     "large_sweep": {"load.p.num": 30, "substrate.hrms.num": 3},
     "interface_bem": {"bem.grid": 64, "bem.realizations": 1, "load.p.num": 3},
     "elastoplastic_bem": {"bem.grid": 32, "bem.pixels_per_wavelength": 3.2, "bem.realizations": 2, "load.p.num": 5},
+    "coating_bem": {"bem.grid": 64, "bem.pixels_per_wavelength": 2, "bem.realizations": 2},  # zeta = 32 as the scene
 }
 #: figures drawn from a q integral (they name qL)
 OVER_Q = ("fig3", "fig4", "fig5", "bem_comparison", "fig1", "fig2", "fig6", "fig8", "fig9", "fig10", "fig11",
@@ -209,7 +210,7 @@ def test_every_builtin_scene_is_plotted_by_a_test():
 
 @pytest.mark.parametrize("name", sorted(REDUCED))
 def test_builtin_scene_figures_reduced(name, tmp_path):
-    if name in ("interface_bem", "elastoplastic_bem"):
+    if name in ("interface_bem", "elastoplastic_bem", "coating_bem"):
         pytest.importorskip("tamaas", reason="the BEM needs the optional extra roughcontact[bem]")
     _render(name, tmp_path, _reduced(name))
 

@@ -131,7 +131,7 @@ COATING = 'coating_thickness = "10 um"\ncoating_E = "3 GPa"\ncoating_nu = 0.35\n
 
 
 @pytest.mark.parametrize("scene, what", [("friction", "friction stage"), ("adhesion", "adhesion stage"),
-                                         ("seal", "leakage stage"), ("bem", "BEM")])
+                                         ("seal", "leakage stage"), ("interface_bem", "interface_bem stage")])
 def test_stages_that_take_a_homogeneous_solid_refuse_a_coating_in_one_line(tmp_path, capsys, scene, what):
     path = _edited(tmp_path, scene, COATING)
     out = tmp_path / "out"

@@ -38,7 +38,7 @@ def variant_gammas(inp) -> dict[str, float | None]:
     return {name: (gamma if name == chosen else DEFAULT_GAMMA[name]) for name in VARIANTS}
 
 
-def theory_variants(inp, q, C_rows, q_upper, p_values, E_star) -> tuple[np.ndarray, np.ndarray]:
+def theory_variants(inp, q, C_rows, q_upper, p_values, E_star, layer=None) -> tuple[np.ndarray, np.ndarray]:
     """A/A0 and u of every variant at zeta = q_upper / qL.
 
     Parameters
@@ -54,7 +54,9 @@ def theory_variants(inp, q, C_rows, q_upper, p_values, E_star) -> tuple[np.ndarr
     p_values : array (k,)
         Nominal pressures (Pa).
     E_star : float
-        Effective modulus (Pa).
+        Effective modulus (Pa); with ``layer``, the substrate's.
+    layer : tuple, optional
+        A coated solid (:func:`roughcontact.stages.shared.material.coating_layer`); None: a half-space.
 
     Returns
     -------
@@ -69,7 +71,7 @@ def theory_variants(inp, q, C_rows, q_upper, p_values, E_star) -> tuple[np.ndarr
     for j, C in enumerate(C_rows):
         for k, name in enumerate(VARIANTS):
             area[:, j, k], u[:, j, k] = variant_theory(q, C, q_upper, p_values, E_star, name, gammas[name],
-                                                       alpha, numerics)
+                                                       alpha, numerics, layer=layer)
     return area, u
 
 
