@@ -11,6 +11,12 @@ scene (a fresh output folder, the parsed scene cached) at most 2x (issue 27); ``
 below the floor (it loads no science stack). "cold, new scene" turns the parsed-scene cache off
 (ROUGHCONTACT_CACHE=off), so that the scene is parsed and the unit registry built.
 
+"xarray in use" is the floor of any program that builds one labelled array here: importing numpy
+and xarray, then one DataArray with an index coordinate, which makes xarray import dask.array (and
+with it scipy.sparse, scipy.fft, scipy.special) to ask whether the data is a dask array, and pint
+to ask whether it is a pint quantity, when these are installed. The cold scene's ratio to it is
+printed too: what the run itself costs above what xarray costs any user.
+
 ``--baseline REV`` adds, interleaved with the others, the cold scene and ``--help`` of the git
 revision REV of this repository (its files exported to a temporary folder and imported from
 there, with this interpreter and these libraries): before and after in one run.
@@ -32,6 +38,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[2]
 FLOOR = "python -c 'import numpy, xarray'"
 COLD = "roughcontact run (cold)"
+IN_USE = "xarray in use (one DataArray with an index)"
+IN_USE_CODE = "import numpy, xarray; xarray.DataArray(numpy.zeros(2), dims='x', coords={'x': [0.0, 1.0]})"
 
 
 def _cli() -> list[str]:
@@ -82,6 +90,7 @@ def main() -> None:
                        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         cases = {
             FLOOR: lambda i: _timed([sys.executable, "-c", "import numpy, xarray"]),
+            IN_USE: lambda i: _timed([sys.executable, "-c", IN_USE_CODE]),
             "roughcontact --help": lambda i: _timed([*cli, "--help"]),
             "roughcontact run (all fresh)": lambda i: _timed(
                 [*cli, "run", args.scene, "--outdir", str(fresh), "--quiet"]),
@@ -117,6 +126,8 @@ def main() -> None:
         target = f"  (target <= {targets[name]:g}x)" if name in targets else ""
         per_round = ", ".join(f"{t / f:.2f}" for t, f in zip(times[name], times[FLOOR], strict=True))
         print(f"{name:48s} {seconds:6.3f} s  {ratio[name]:5.2f}x{target}  (per round: {per_round})")
+    above = statistics.median(a / b for a, b in zip(times[COLD], times[IN_USE], strict=True))
+    print(f"{COLD} / {IN_USE}: {above:.2f}x (median of the rounds' ratios)")
 
 
 if __name__ == "__main__":
