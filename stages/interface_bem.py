@@ -17,8 +17,9 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from roughcontact.physics.effective_medium import BRUGGEMAN_AREA
 from roughcontact.physics.interface import stiffness_from_psd
-from roughcontact.physics.leakage import BRUGGEMAN_AREA, leak_rate, leakage_kernel, sealing_pressure
+from roughcontact.physics.leakage import leak_rate, leakage_kernel, sealing_pressure
 from roughcontact.physics.reynolds import flow_factors, percolates
 from roughcontact.stage import Figure, Param, Stage, StageInput, Var, register, register_params
 
