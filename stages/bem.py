@@ -171,6 +171,9 @@ def describe_bem(inp: StageInput) -> Shape:
 
 
 def compute_bem(inp: StageInput) -> xr.Dataset:
+    """Solve every map pair at every load (:func:`solve_all`), set the theory beside it at the BEM's
+    magnification (and every variant; with contact.yield_stress the elastoplastic areas), add the
+    maps asked for, and say how (the text attributes)."""
     psd = inp.upstream["psd"]
     q = psd["q"].values
     single_surfaces(psd.sizes)

@@ -5,8 +5,8 @@ failures as the user's errors, the map and its band (synthesized or measured), t
 solved for, the map pairs (realizations), every pair solved at every pressure, and the text
 attributes that say how.
 
-Not a stage (it registers nothing but the coordinate ``realization``'s metadata, :data:`REALIZATION`).
-The scene section ``[bem]`` is declared by :mod:`roughcontact.stages.bem`. See docs/bem.md.
+Not a stage (it registers nothing); :data:`REALIZATION` is the metadata of both stages' coordinate
+``realization``. The scene section ``[bem]`` is declared by :mod:`roughcontact.stages.bem`. See docs/bem.md.
 """
 
 from __future__ import annotations
@@ -26,6 +26,7 @@ from .material import coating_attrs, coating_layer
 
 #: the optional dependency and how to install it (named in the error without it)
 EXTRA = 'pip install "roughcontact[bem]"'
+
 
 def _missing(exc: SolverMissing) -> UserError:
     return UserError(f"the bem stage needs the optional dependency tamaas, which is not installed ({exc.reason}); "
