@@ -8,6 +8,13 @@ solid: the Polonsky-Keer solver with the layered surface compliance, material.co
 :mod:`roughcontact.physics.estimators` (rms slope of a map). The measured maps (``bem.surfaces``) are checked by
 :mod:`roughcontact.stages.shared.maps`. Figure: :mod:`roughcontact.stages.figures.bem`.
 
+This module declares the stage and orchestrates its compute; the work is in ``stages/shared/``:
+:mod:`~roughcontact.stages.shared.bem_solve` (the solver, Tamaas or the layered kernel, the map,
+its band and the realizations, every pair solved), :mod:`~roughcontact.stages.shared.bem_theory`
+(the theory and its variants at the BEM's magnification), :mod:`~roughcontact.stages.shared.bem_hardness`
+(the elastoplastic outputs with contact.yield_stress) and :mod:`~roughcontact.stages.shared.bem_fields`
+(the pressure and gap maps).
+
 The comparison uses one band on both sides: roughness on qL <= |q| <= q_cut on an N x N
 periodic map of side L = 2 pi / qL, the theory read at zeta_bem = q_cut / qL, which the scene
 must list in ``contact.zeta``. See docs/bem.md.
@@ -18,13 +25,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from roughcontact.physics.bem import SolverMissing, SubPixelContact, contact_pair, tamaas_module
-from roughcontact.physics.bem_cg import NoConvergence, saturated_areas
-from roughcontact.physics.bem_coated import coated_contact_pair
-from roughcontact.physics.estimators import rms_slope_of_map
-from roughcontact.physics.layered import surface_compliance
-from roughcontact.physics.plasticity import elastoplastic_areas
-from roughcontact.physics.synthesis import band_limit, grid_band, synthesize_pair, white_noise_pair
+from roughcontact.physics.synthesis import grid_band
 from roughcontact.stage import (
     Figure,
     Param,
@@ -32,7 +33,6 @@ from roughcontact.stage import (
     Shape,
     Stage,
     StageInput,
-    UserError,
     Var,
     register,
     register_params,
@@ -43,26 +43,21 @@ from .figures.bem import figure_bem_comparison, figure_bem_elastoplastic, figure
 from .figures.bem_coating import figure_bem_coating
 from .figures.bem_fields import field_figures
 from .shared.bem_fields import FIELD_KEYS, MAPS as FIELD_MAPS, PARAMS as FIELD_PARAMS, Fields, with_fields
-from .shared.maps import check_eta, map_band, map_surfaces, measured_maps, topography_files
-from .shared.material import (
-    COATING_KEYS,
-    E_STAR,
-    MATERIAL_KEYS,
-    coating_attrs,
-    coating_layer,
-    e_star,
-    refuse_coating,
+from .shared.bem_hardness import PLASTIC, PLASTIC_REALIZATIONS, PLASTIC_VARS, check_hardness, with_hardness
+from .shared.bem_solve import (
+    REALIZATION,
+    add_solve_attrs,
+    bem_band,
+    bem_eta_values,
+    single_surfaces,
+    solve_all,
+    solver,
 )
+from .shared.bem_theory import at_zeta, on_p_eta, with_variants, zeta_index
+from .shared.maps import check_eta, map_band, map_surfaces, measured_maps, topography_files
+from .shared.material import COATING_KEYS, E_STAR, MATERIAL_KEYS, e_star, refuse_coating
 from .shared.surfaces import MAP_KEYS, surface_reads
-from .shared.variants import THEORY, VARIANT_KEYS, VARIANTS, theory_variants, variant_attrs
-
-#: the optional dependency and how to install it (named in the error without it)
-EXTRA = 'pip install "roughcontact[bem]"'
-
-#: elastoplastic outputs (contact.yield_stress): per realization, and over (p, eta)
-PLASTIC_REALIZATIONS = ("bem_elastic_contact_area_ratio", "bem_plastic_contact_area_ratio")
-PLASTIC = (*PLASTIC_REALIZATIONS, *(f"{n}_{s}" for n in PLASTIC_REALIZATIONS for s in ("mean", "std")),
-           "theory_elastic_contact_area_ratio", "theory_plastic_contact_area_ratio")
+from .shared.variants import THEORY, VARIANT_KEYS, VARIANTS
 
 register_section(
     Section(
@@ -93,67 +88,6 @@ register_params(
 register_params("bem", *FIELD_PARAMS)  # the maps stored as optional outputs (stages/shared/bem_fields.py)
 
 
-def _missing(exc: SolverMissing) -> UserError:
-    return UserError(f"the bem stage needs the optional dependency tamaas, which is not installed ({exc.reason}); "
-                     f"install it with: {EXTRA}", key="outputs.variables")
-
-
-def solver():
-    """The tamaas module, or a UserError naming the extra to install."""
-    try:
-        return tamaas_module()
-    except SolverMissing as exc:
-        raise _missing(exc) from None
-
-
-def solve_pair(h1, h2, pixel_size, E_star, pressures, layer=None, **kwargs):
-    """:func:`roughcontact.physics.bem.contact_pair` (Tamaas, the half-space), or with a coating
-    ``layer`` :func:`roughcontact.physics.bem_coated.coated_contact_pair` (the layered kernel; E_star
-    unused), their failures as the user's errors."""
-    try:
-        if layer is not None:
-            return coated_contact_pair(h1, h2, pixel_size, layer, pressures, **kwargs)
-        return contact_pair(h1, h2, pixel_size, E_star, pressures, **kwargs)
-    except NoConvergence as exc:
-        raise UserError(f"the BEM of the coated solid did not converge ({exc}); use a larger "
-                        "numerics.bem_tolerance", key="numerics.bem_tolerance") from None
-    except SolverMissing as exc:
-        raise _missing(exc) from None
-    except SubPixelContact as exc:
-        nx, ny = exc.shape
-        raise UserError(
-            f"the BEM cannot solve p = {exc.pressure:.6g} Pa on this {nx} x {ny} map: the contact area is a single "
-            f"pixel or less (tamaas: {exc.detail}); use larger pressures or a finer bem.grid", key="load.p") from None
-
-
-def _zeta_index(values, zeta: float, stage: str, set_by: str) -> int:
-    """Where the theory stage's magnifications hold the BEM's zeta; a UserError if they do not."""
-    hit = np.flatnonzero(np.isclose(np.atleast_1d(values), zeta, rtol=1e-9, atol=0.0))
-    if hit.size == 0:
-        raise UserError(
-            f"the {stage} stage has no magnification zeta = {zeta:.10g}, the band the BEM map resolves "
-            f"(q_cut / qL, set by {set_by}); add {zeta:.10g} to contact.zeta", key="contact.zeta")
-    return int(hit[0])
-
-
-def _at_zeta(ds: xr.Dataset, var: str, zeta: float, stage: str, set_by: str) -> xr.DataArray:
-    """A theory variable at the BEM's magnification, which the stage must have computed."""
-    da = ds[var]
-    if "zeta" not in da.dims and "zeta" not in da.coords:
-        return da
-    index = _zeta_index(da["zeta"].values, zeta, stage, set_by)
-    return da.isel(zeta=index) if "zeta" in da.dims else da
-
-
-def single_surfaces(sizes) -> None:
-    """The BEM solves one pair of surfaces: no hrms sweep, no spectrum draws."""
-    for name in ("substrate", "solid"):
-        if sizes.get(f"hrms_{name}", 1) > 1:
-            raise UserError(f"the bem stage does not sweep hrms_{name}: give a single value", key=f"{name}.hrms")
-    if sizes.get("draw", 1) > 1:
-        raise UserError("the bem stage does not take spectrum draws: set bands.draws = 0", key="bands.draws")
-
-
 def check_bem(inp: StageInput) -> None:
     """The optional dependency, usable measured maps, a hardness for the elastoplastic outputs; a
     coating only for the bem stage itself (it solves the coated solid with the layered kernel; the
@@ -161,10 +95,7 @@ def check_bem(inp: StageInput) -> None:
     if inp.stage != "bem":
         refuse_coating(inp, f"the {inp.stage} stage (its surface kernel is the homogeneous half-space's)")
     solver()
-    asked = sorted(set(PLASTIC) & inp.wanted)
-    if asked and inp["contact.yield_stress"] is None:
-        raise UserError(f"{asked[0]} needs a penetration hardness: set [contact] yield_stress (e.g. \"1.5 GPa\")",
-                        key="contact.yield_stress")
+    check_hardness(inp)
     names = map_surfaces(inp)
     check_eta(inp, names)
     if names:
@@ -232,127 +163,17 @@ def describe_bem(inp: StageInput) -> Shape:
     for stage in ("contact", "separation"):
         values = inp.upstream[stage].coords.get("zeta") if stage in inp.upstream else None
         if values is not None:
-            _zeta_index(values, zeta, stage, limit)
+            zeta_index(values, zeta, stage, limit)
     swept = {"p": np.size(inp["load.p"])}  # the sweep points the engine counts: those its upstream results span
     for shape in inp.upstream.values():
         swept.update({d: n for d, n in shape.sizes.items() if d in ("p", "eta", "zeta")})
     return _bem_shape(inp, maps, int(np.prod(list(swept.values()))))
 
 
-def bem_band(inp: StageInput, q: np.ndarray, names: tuple[str, ...]) -> dict:
-    """The map and its band: grid n, side L, pixel dx, q_cut, zeta_bem, what limits them, the
-    realizations and seed, and (measured) the band-limited maps."""
-    n_w = inp["bem.pixels_per_wavelength"]
-    if not names:
-        n = inp["bem.grid"]
-        L, dx, q_cut, zeta_bem = grid_band(q[0], q[-1], n, n_w)
-        return dict(n=n, R=inp["bem.realizations"], seed=inp["bem.seed"], L=L, dx=dx, q_cut=q_cut, zeta=zeta_bem,
-                    limit="bem.grid and bem.pixels_per_wavelength", maps=None)
-    maps = measured_maps(inp, names)  # the map sets the grid and the band; one "realization"
-    n, dx, L = maps["n"], maps["pixel_size"], maps["side"]
-    q_cut, zeta_bem, limit = map_band(q[0], q[-1], n, L, maps["q_reliable"], n_w)
-    if limit == "the maps' reliability cutoff":
-        limit += f" ({maps['cutoff']})"
-    zero = np.zeros((n, n))
-    h_maps = {name: band_limit(maps["h"].get(name, zero), dx, q_cut) for name in ("substrate", "solid")}
-    return dict(n=n, R=1, seed=None, L=L, dx=dx, q_cut=q_cut, zeta=zeta_bem, limit=limit, maps=maps, h=h_maps)
-
-
-def bem_eta_values(inp: StageInput, psd: xr.Dataset, names, C1, C2) -> np.ndarray:
-    """The coherences solved for: NaN alone when eta(q) is measured (in the maps and in the
-    theory's combined PSD), the psd stage's eta sweep, or the scene's single value."""
-    if names or isinstance(inp["interface.eta"], str):
-        return np.array([np.nan])
-    if "eta" in psd["psd_combined"].dims:
-        return np.atleast_1d(psd["eta"].values)
-    if not (np.any(C1 > 0) and np.any(C2 > 0)):
-        return np.array([0.0])  # one surface is smooth: eta has no effect
-    return np.atleast_1d(float(np.atleast_1d(inp["interface.eta"])[0]))
-
-
-def map_pairs(band: dict, q, C1, C2, eta_values):
-    """(eta index, realization, h1, h2) of every map pair to solve on: the measured maps, or for
-    each realization the synthesized pair at every eta (the same noise for every eta)."""
-    if band["maps"] is not None:
-        yield 0, 0, band["h"]["substrate"], band["h"]["solid"]
-        return
-    for r in range(band["R"]):
-        noise = white_noise_pair(band["n"], band["seed"], r, band=band["zeta"])
-        for j, eta in enumerate(eta_values):
-            yield (j, r) + synthesize_pair(q, C1, C2, eta, band["n"], band["q_cut"], noise=noise)
-
-
-def _solve_all(inp, band, q, C1, C2, E_star, p_values, eta_values, edges, fields=None) -> dict:
-    """Every map pair solved at every pressure: area, gap, histogram and overflow over
-    (p, eta, realization), and the composite's rms height and slope over (eta, realization);
-    ``fields`` (:class:`Fields`) keeps the maps of the realization it wants."""
-    R, dx = band["R"], band["dx"]
-    shape = (p_values.size, eta_values.size, R)
-    out = {k: np.empty(shape) for k in ("area", "mean_gap", "overflow")}
-    out["histogram"] = np.empty(shape + (edges.shape[-1] - 1,))
-    out["hrms"], out["slope"] = np.empty(shape[1:]), np.empty(shape[1:])
-    order = np.argsort(p_values)  # increasing load: each solve starts from the previous one
-    tick = inp.progress("BEM solves", total=p_values.size * (1 if band["maps"] is not None else R * eta_values.size),
-                        unit="solve")
-    for j, r, h1, h2 in map_pairs(band, q, C1, C2, eta_values):
-        out["hrms"][j, r] = float(np.std(h1 - h2))
-        out["slope"][j, r] = rms_slope_of_map(h1 - h2, dx)
-        keep = fields is not None and fields.wants(r)
-        res = solve_pair(h1, h2, dx, E_star, p_values[order], layer=coating_layer(inp),
-                         tolerance=inp["numerics.bem_tolerance"], stress_edges=edges[order, j], progress=tick,
-                         fields=keep)
-        for k in ("area", "mean_gap", "histogram", "overflow"):
-            out[k][order, j, r] = res[k]
-        if keep:
-            fields.keep_solved(j, res, order)
-    return out
-
-
-def _on(da: xr.DataArray, p_values, eta_values, has_eta) -> np.ndarray:
-    """A theory variable as a (p, eta) array."""
-    if "p" not in da.dims:
-        da = da.expand_dims(p=p_values)
-    if has_eta:
-        return da.transpose("p", "eta").values
-    return np.asarray(da.transpose("p").values)[:, None] * np.ones(np.size(eta_values))
-
-
-def _describe(inp: StageInput, ds: xr.Dataset, band: dict) -> None:
-    """The text attributes: solver, surfaces, grid mapping, and how the maps were made."""
-    measured = band["maps"] is not None
-    tolerance = inp["numerics.bem_tolerance"]
-    if coating_layer(inp) is None:
-        method = f"tamaas {solver().__version__} PolonskyKeerRey, tolerance {tolerance:g}"
-    else:
-        method = (f"roughcontact.physics.bem_coated: Polonsky-Keer constrained conjugate gradients (physics/bem_cg.py) "
-                  f"with the coated solid's surface compliance 2 / (q E_eff(q)) (physics/layered.py), tolerance "
-                  f"{tolerance:g}")
-    ds.attrs.update(coating_attrs(inp))
-    ds.attrs.update({
-        "bem_solver": method,
-        "bem_surfaces": "measured" if measured else "synthesized",
-        "bem_grid_mapping": f"map side L = {'the measured maps side' if measured else '2 pi / qL'} = "
-                            f"{band['L']:.6g} m, {band['n']} x {band['n']} pixels of dx = {band['dx']:.6g} m; "
-                            f"roughness on 2 pi / L <= |q| <= q_cut = {band['q_cut']:.6g} 1/m (set by "
-                            f"{band['limit']}; zeta_bem = {band['zeta']:.6g}); theory read at the same zeta",
-    })
-    if measured:
-        maps = band["maps"]
-        ds.attrs["bem_maps"] = (
-            "; ".join(f"{name}: {maps['files'][name]} (detrend {maps['detrend'][name]})" for name in maps["files"])
-            + "; composite h1 - h2 (substrate minus solid, both heights upwards in one frame, as for the measured "
-              "coherence), modes above q_cut and the mean removed; one realization")
-    else:
-        ds.attrs.update({
-            "bem_synthesis": "H1 = (2 pi/L) sqrt(C1) xi1, H2 = (2 pi/L) sqrt(C2) (eta xi1 + sqrt(1 - eta^2) xi2), "
-                             "xi = rfft2(white noise)/m on the smallest grid m holding the band (so a finer grid gives "
-                             "the same surface), from numpy.random.default_rng([seed, realization]); "
-                             "the same noise for every eta of a realization",
-            "bem_seed": int(band["seed"]),
-        })
-
-
 def compute_bem(inp: StageInput) -> xr.Dataset:
+    """Solve every map pair at every load (:func:`solve_all`), set the theory beside it at the BEM's
+    magnification (and every variant; with contact.yield_stress the elastoplastic areas), add the
+    maps asked for, and say how (the text attributes)."""
     psd = inp.upstream["psd"]
     q = psd["q"].values
     single_surfaces(psd.sizes)
@@ -363,9 +184,9 @@ def compute_bem(inp: StageInput) -> xr.Dataset:
     band = bem_band(inp, q, names)
     zeta_bem, limit = band["zeta"], band["limit"]
     contact, separation = inp.upstream["contact"], inp.upstream["separation"]
-    G = _at_zeta(contact, "G", zeta_bem, "contact", limit)
-    theory_area = _at_zeta(contact, "contact_area_ratio", zeta_bem, "contact", limit)
-    theory_gap = _at_zeta(separation, "mean_separation", zeta_bem, "separation", limit)
+    G = at_zeta(contact, "G", zeta_bem, "contact", limit)
+    theory_area = at_zeta(contact, "contact_area_ratio", zeta_bem, "contact", limit)
+    theory_gap = at_zeta(separation, "mean_separation", zeta_bem, "separation", limit)
     p_values = np.atleast_1d(np.asarray(inp["load.p"], dtype=float))
     has_eta = "eta" in psd["psd_combined"].dims
     eta_values = bem_eta_values(inp, psd, names, C1, C2)
@@ -377,7 +198,7 @@ def compute_bem(inp: StageInput) -> xr.Dataset:
     top = np.where(top > p_values[:, None], top, 2.0 * p_values[:, None])
     edges = np.linspace(0.0, 1.0, nb + 1) * top[..., None]  # (p, eta, nb + 1)
     fields = Fields(inp, band, eta_values.size)
-    res = _solve_all(inp, band, q, C1, C2, E_star, p_values, eta_values, edges, fields)
+    res = solve_all(inp, band, q, C1, C2, E_star, p_values, eta_values, edges, fields)
 
     R, dims = band["R"], ("p", "eta", "realization")
     ds = xr.Dataset(coords={"p": p_values, "eta": eta_values, "realization": np.arange(R), "bem_stress_level": level})
@@ -393,21 +214,21 @@ def compute_bem(inp: StageInput) -> xr.Dataset:
     for var in ("bem_contact_area_ratio", "bem_mean_gap"):
         ds[f"{var}_mean"] = ds[var].mean("realization")
         ds[f"{var}_std"] = ds[var].std("realization", ddof=1 if R > 1 else 0)
-    t_area = _on(theory_area, p_values, eta_values, has_eta)
-    t_gap = _on(theory_gap, p_values, eta_values, has_eta)
+    t_area = on_p_eta(theory_area, p_values, eta_values, has_eta)
+    t_gap = on_p_eta(theory_gap, p_values, eta_values, has_eta)
     ds["theory_contact_area_ratio"] = (("p", "eta"), t_area)
     ds["theory_mean_separation"] = (("p", "eta"), t_gap)
     with np.errstate(divide="ignore", invalid="ignore"):
         ds["area_ratio_theory_to_bem"] = (("p", "eta"), t_area / ds["bem_contact_area_ratio_mean"].values)
         ds["separation_ratio_theory_to_bem"] = (("p", "eta"), t_gap / ds["bem_mean_gap_mean"].values)
-    ds = _with_variants(inp, ds, psd, q, zeta_bem, p_values, has_eta, E_star)
+    ds = with_variants(inp, ds, psd, q, zeta_bem, p_values, has_eta, E_star)
     if set(PLASTIC) & inp.wanted:
-        ds = _with_hardness(inp, ds, band, q, C1, C2, E_star, p_values, eta_values, G_pe)
+        ds = with_hardness(inp, ds, band, q, C1, C2, E_star, p_values, eta_values, G_pe)
     ds = fields.add_to(ds, p_values)
     for k, v in attrs.items():
         ds[k] = xr.DataArray(v)
     ds["E_star"] = xr.DataArray(E_star)
-    _describe(inp, ds, band)
+    add_solve_attrs(inp, ds, band)
     if not has_eta:
         ds = ds.isel(eta=0, drop=True)
     if np.ndim(inp["load.p"]) == 0:
@@ -415,64 +236,6 @@ def compute_bem(inp: StageInput) -> xr.Dataset:
     return ds
 
 
-def _with_hardness(inp, ds, band, q, C1, C2, E_star, p_values, eta_values, G_pe) -> xr.Dataset:
-    """The elastic and plastic contact area with the surface hardness contact.yield_stress:
-    the saturated BEM (pressure bounded by sigma_Y; physics/bem_cg.py) on the same map pairs,
-    and the theory's (two absorbing walls, physics/plasticity.py) at the BEM's magnification."""
-    Y = float(inp["contact.yield_stress"])
-    R = band["R"]
-    layer = coating_layer(inp)
-    compliance = None if layer is None else (lambda k: surface_compliance(k, *layer))
-    shape = (p_values.size, eta_values.size, R)
-    el, pl = np.empty(shape), np.empty(shape)
-    tick = inp.progress("BEM elastoplastic solves",
-                        total=p_values.size * (1 if band["maps"] is not None else R * eta_values.size), unit="solve")
-    for j, r, h1, h2 in map_pairs(band, q, C1, C2, eta_values):
-        try:
-            res = saturated_areas(h1 - h2, band["dx"], E_star, p_values, Y, compliance=compliance,
-                                  tolerance=inp["numerics.bem_tolerance"], progress=tick)
-        except NoConvergence as exc:
-            raise UserError(f"the saturated BEM did not converge ({exc}); use a larger numerics.bem_tolerance",
-                            key="numerics.bem_tolerance") from None
-        el[:, j, r], pl[:, j, r] = res["elastic_area"], res["plastic_area"]
-    attrs = {"yield_stress_Pa": Y, "bem_solver": "roughcontact.physics.bem_cg, Polonsky-Keer with the pressure "
-             "bounded by yield_stress (Kato's saturated contact)"
-             + ("" if layer is None else ", the coated solid's surface compliance 2 / (q E_eff(q))")}
-    dims = ("p", "eta", "realization")
-    t_el, t_pl = elastoplastic_areas(p_values[:, None], np.asarray(G_pe)[None, :], Y)
-    values = {"bem_elastic_contact_area_ratio": el, "bem_plastic_contact_area_ratio": pl}
-    for name, a in values.items():
-        out = {name: (dims, a), f"{name}_mean": (dims[:2], a.mean(axis=-1)),
-               f"{name}_std": (dims[:2], a.std(axis=-1, ddof=1 if R > 1 else 0))}
-        for k, v in out.items():
-            if k in inp.wanted:
-                ds[k] = xr.Variable(*v, attrs=attrs)
-    for k, v in (("theory_elastic_contact_area_ratio", t_el), ("theory_plastic_contact_area_ratio", t_pl)):
-        if k in inp.wanted:
-            ds[k] = xr.Variable(("p", "eta"), v, attrs={"yield_stress_Pa": Y})
-    return ds
-
-
-def _with_variants(inp, ds, psd, q, zeta_bem, p_values, has_eta, E_star) -> xr.Dataset:
-    """Every theory variant (eq 19 / eq 57 and each correction) at the BEM's magnification, and
-    its ratio to the BEM, over (p, eta, theory)."""
-    C = psd["psd_combined"]
-    rows = C.transpose("eta", "q").values if has_eta else np.atleast_2d(C.values)
-    area, gap = theory_variants(inp, q, rows, zeta_bem * q[0], p_values, E_star, layer=coating_layer(inp))
-    dims = ("p", "eta", "theory")
-    ds = ds.assign_coords(theory=list(VARIANTS))
-    ds["theory_variant_contact_area_ratio"] = (dims, area)
-    ds["theory_variant_mean_separation"] = (dims, gap)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        ds["area_ratio_variant_to_bem"] = (dims, area / ds["bem_contact_area_ratio_mean"].values[..., None])
-        ds["separation_ratio_variant_to_bem"] = (dims, gap / ds["bem_mean_gap_mean"].values[..., None])
-    ds.attrs.update(variant_attrs(inp))
-    return ds
-
-
-#: the coordinate realization of the stages that solve BEM maps
-REALIZATION = Var("1", "realization (surface pair)", attrs={"comment": "index of the surface pair: random pairs; a "
-                                                                      "single 0 for the measured maps"})
 
 _BAND_NAMES = {
     "bem_zeta": ("magnification zeta of the BEM map", "the magnification resolved by the BEM map, q_cut / qL (the "
@@ -485,21 +248,6 @@ _BAND_NAMES = {
 _BAND_UNITS = {"bem_zeta": "1", "bem_q_cut": "1/m", "bem_system_size": "m", "bem_pixel_size": "m", "bem_grid": "1"}
 _THEORY = "at the BEM's magnification bem_zeta"
 
-_HARD = "with the penetration hardness contact.yield_stress"
-_PLASTIC_VARS = {
-    "bem_elastic_contact_area_ratio": Var("1", "elastic contact area A_el/A0, BEM", optional=True, attrs={
-        "comment": f"saturated BEM {_HARD}: fraction of pixels with 0 < p < yield_stress, per realization"}),
-    "bem_plastic_contact_area_ratio": Var("1", "plastic contact area A_pl/A0, BEM", optional=True, attrs={
-        "comment": f"saturated BEM {_HARD}: fraction of pixels at p = yield_stress, per realization"}),
-    "bem_elastic_contact_area_ratio_mean": Var("1", "BEM A_el/A0, mean over realizations", optional=True),
-    "bem_elastic_contact_area_ratio_std": Var("1", "BEM A_el/A0, std over realizations", optional=True),
-    "bem_plastic_contact_area_ratio_mean": Var("1", "BEM A_pl/A0, mean over realizations", optional=True),
-    "bem_plastic_contact_area_ratio_std": Var("1", "BEM A_pl/A0, std over realizations", optional=True),
-    "theory_elastic_contact_area_ratio": Var("1", "elastic contact area A_el/A0, theory", optional=True, attrs={
-        "comment": f"Persson's theory {_HARD} (docs/plasticity.md) {_THEORY}"}),
-    "theory_plastic_contact_area_ratio": Var("1", "plastic contact area A_pl/A0, theory", optional=True, attrs={
-        "comment": f"Persson's theory {_HARD} (docs/plasticity.md) {_THEORY}"}),
-}
 
 register(
     Stage(
@@ -564,7 +312,7 @@ register(
             **{k: Var(_BAND_UNITS[k], label, attrs={"comment": comment} if comment else {})
                for k, (label, comment) in _BAND_NAMES.items()},
             "E_star": E_STAR,
-            **_PLASTIC_VARS,
+            **PLASTIC_VARS,
             **FIELD_MAPS["bem"],
         },
         coords={

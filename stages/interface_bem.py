@@ -2,7 +2,7 @@
 gap maps, side by side with the theory over (p, eta).
 
 The same surface pairs as the ``bem`` stage (synthesized with the scene's spectra and coherence,
-or the measured maps; :func:`roughcontact.stages.bem.map_pairs`) are solved again, at each
+or the measured maps; :func:`roughcontact.stages.shared.bem_solve.map_pairs`) are solved again, at each
 pressure p and at p exp(+-step): the exact stiffness is the central difference of the mean gap,
 K = -(p+ - p-)/(u+ - u-); the gap map at p is handed to the thin-film (Reynolds) solver
 (:mod:`roughcontact.physics.reynolds`) for the exact flow factor along both axes; and a
@@ -17,17 +17,19 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from roughcontact.physics.effective_medium import BRUGGEMAN_AREA
 from roughcontact.physics.interface import stiffness_from_psd
-from roughcontact.physics.leakage import BRUGGEMAN_AREA, leak_rate, leakage_kernel, sealing_pressure
+from roughcontact.physics.leakage import leak_rate, leakage_kernel, sealing_pressure
 from roughcontact.physics.reynolds import flow_factors, percolates
 from roughcontact.stage import Figure, Param, Stage, StageInput, Var, register, register_params
 
-from .bem import REALIZATION, bem_band, bem_eta_values, check_bem, describe_bem, map_pairs, single_surfaces, solve_pair
+from .bem import check_bem, describe_bem
 from .figures.bem_fields import field_figures
 from .figures.interface_bem import figure_interface_bem
 from .leakage import NUMERICS as LEAKAGE_NUMERICS, SEAL_KEYS, leakage_settings, leakage_theory_attrs, seal_parameters
 from .separation import check_separation
 from .shared.bem_fields import FIELD_KEYS, MAPS as FIELD_MAPS, Fields, with_fields
+from .shared.bem_solve import REALIZATION, bem_band, bem_eta_values, map_pairs, single_surfaces, solve_pair
 from .shared.maps import check_eta, map_surfaces, topography_files
 from .shared.material import COATING_KEYS, E_STAR, MATERIAL_KEYS, e_star
 from .stiffness import SEPARATION_KEYS, separation_settings

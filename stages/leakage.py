@@ -12,7 +12,8 @@ from __future__ import annotations
 
 import xarray as xr
 
-from roughcontact.physics.leakage import BRUGGEMAN_AREA, PERCOLATION_AREA, leak_rate, leakage_kernel, sealing_pressure
+from roughcontact.physics.effective_medium import BRUGGEMAN_AREA
+from roughcontact.physics.leakage import PERCOLATION_AREA, leak_rate, leakage_kernel, sealing_pressure
 from roughcontact.stage import (
     Figure,
     Param,

@@ -30,8 +30,8 @@ from roughcontact.stage import (
     register_section,
 )
 
-from .bem import solver
 from .figures.validation import figure_kappa, figure_separation_ratio
+from .shared.bem_solve import solver
 from .shared.material import COATING_KEYS, MATERIAL_KEYS, refuse_coating
 from .shared.validation_table import OUTPUTS as TABLE_OUTPUTS, TABLE_COORDS, case_kwargs, compute_table
 from .shared.variants import VARIANT_KEYS

@@ -32,8 +32,8 @@ from roughcontact.physics.synthesis import (
     synthesize_pair,
     white_noise_pair,
 )
-from roughcontact.stages.bem import EXTRA, solve_pair
 from roughcontact.stages.figures.bem import figure_bem_comparison
+from roughcontact.stages.shared.bem_solve import EXTRA, solve_pair
 from roughcontact.stages.shared.maps import map_band
 
 # a self-affine PSD in reduced units: qL = 1 (map side 2 pi), roll-off at 4, cut-off 100

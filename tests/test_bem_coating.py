@@ -131,7 +131,7 @@ def test_a_coating_of_the_substrate_material_is_the_homogeneous_result(run_scene
 
 def test_the_homogeneous_path_is_tamaas_bit_for_bit(run_scene, tmp_path):
     """No coating: the stage's areas and gaps are Tamaas' solve of the same synthesized maps, exactly."""
-    from roughcontact.stages.bem import map_pairs
+    from roughcontact.stages.shared.bem_solve import map_pairs
 
     bem = run_scene(small_scene(), outdir=tmp_path / "a")["base"]
     psd, out = bem["psd"], bem["bem"]

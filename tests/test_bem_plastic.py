@@ -15,8 +15,8 @@ import pytest
 
 from roughcontact import scene as scenes
 from roughcontact.stage import UserError
-from roughcontact.stages.bem import PLASTIC, PLASTIC_REALIZATIONS
 from roughcontact.stages.figures.bem import figure_bem_elastoplastic
+from roughcontact.stages.shared.bem_hardness import PLASTIC, PLASTIC_REALIZATIONS
 
 pytest.importorskip("tamaas")
 

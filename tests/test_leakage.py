@@ -20,17 +20,16 @@ from reference_solutions import reynolds_sinusoidal_gap
 from scipy.special import erf, erfinv
 
 from roughcontact import cli
+from roughcontact.physics.apparent_contact import gap_above
 from roughcontact.physics.contact import persson_G
-from roughcontact.physics.leakage import (
+from roughcontact.physics.critical_junction import critical_gap, critical_junction
+from roughcontact.physics.effective_medium import (
     bruggeman_flow_factor,
-    critical_gap,
-    critical_junction,
     folded_parameters,
-    gap_above,
     gap_distribution,
     interval_volumes,
-    sealing_pressure,
 )
+from roughcontact.physics.leakage import sealing_pressure
 from roughcontact.physics.quadrature import log_grid
 from roughcontact.physics.reynolds import flow_factors, percolates
 from roughcontact.physics.separation import mean_separation, separation_nodes

@@ -12,7 +12,10 @@ modules directly in ``stages/``).
   ``dma`` source);
 * :mod:`.flash`: the flash-temperature option of the friction stage;
 * :mod:`.variants`, :mod:`.validation_table`: the theory variants set against exact numerics,
-  and the validation stage's reductions.
+  and the validation stage's reductions;
+* :mod:`.bem_solve`, :mod:`.bem_theory`, :mod:`.bem_hardness`, :mod:`.bem_fields`: the BEM's
+  surface pairs solved (``bem`` and ``interface_bem`` stages), the theory at its magnification,
+  its elastoplastic outputs, its pressure and gap maps.
 
 Each module declares its scene sections and coordinates once, at import.
 """
