@@ -348,6 +348,9 @@ def compute_bem(inp: StageInput) -> xr.Dataset:
         ds["area_ratio_theory_to_bem"] = (("p", "eta"), t_area / ds["bem_contact_area_ratio_mean"].values)
         ds["separation_ratio_theory_to_bem"] = (("p", "eta"), t_gap / ds["bem_mean_gap_mean"].values)
     ds = _with_variants(inp, ds, psd, q, zeta_bem, p_values, has_eta, E_star)
+    # the theory_* columns' theory, as the contact and separation stages that computed them say it
+    ds.attrs["contact_correction"] = contact["contact_area_ratio"].attrs.get("correction", "persson")
+    ds.attrs.update({k: v for k, v in separation.attrs.items() if k.startswith("separation_refinement")})
     for k, v in attrs.items():
         ds[k] = xr.DataArray(v)
     ds["E_star"] = xr.DataArray(E_star)
@@ -394,7 +397,7 @@ _THEORY = "at the BEM's magnification bem_zeta"
 register(
     Stage(
         name="bem",
-        version="3",
+        version="4",
         compute=compute_bem,
         check=check_bem,
         describe=describe_bem,
