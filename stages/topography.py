@@ -56,7 +56,9 @@ def _spectra(p, edges, spec, other=None):
         s = unbias_processing(p, edges, binned_spectra_area(p["h"], p["sizes"][0], p["sizes"][1], edges, p["q_max"],
                                                             h2))
     s["n"] = s["n"] / mode_factor(p, edges)  # a window correlates neighbouring modes
-    s["K"] = bin_covariance(p, edges, s["n"])  # within a bin and across neighbouring bins
+    s["K"] = bin_covariance(p, edges, s["n"], s.pop("model", None))  # within a bin and across neighbouring bins
+    with np.errstate(divide="ignore"):  # the lowest bins' variance computed exactly
+        s["n"] = np.where(np.diag(s["K"]) > 0, 1.0 / np.where(np.diag(s["K"]) > 0, np.diag(s["K"]), 1.0), s["n"])
     return s
 
 

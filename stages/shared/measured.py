@@ -19,7 +19,7 @@ import json
 import numpy as np
 import xarray as xr
 
-from roughcontact.physics.estimators import merge_spectra, processing_bias_area
+from roughcontact.physics.estimators import merge_spectra, processed_bin_covariance_area, processing_bias_area
 from roughcontact.physics.modes import window_mode_factor_area, window_mode_factor_profiles, window_pair_sums_area
 from roughcontact.physics.preprocessing import detrend_basis, hann_window_1d, hann_window_radial
 from roughcontact.physics.uncertainty import (
@@ -101,7 +101,7 @@ def mode_factor(p: dict, edges: np.ndarray):
     return window_mode_factor_area(*h.shape, *sizes, edges, p["q_max"], hann_window_radial(*h.shape, *sizes))
 
 
-def bin_covariance(p: dict, edges: np.ndarray, n: np.ndarray) -> np.ndarray:
+def bin_covariance(p: dict, edges: np.ndarray, n: np.ndarray, model=None) -> np.ndarray:
     """Relative covariance cov(C_b, C_b') / (C_b C_b') of the binned PSD of scan ``p`` (``n``: its
     effective modes per bin, :func:`mode_factor` counted): 1/n on the diagonal; between the bins
     of a Hann-windowed map, 2 S_bb' / (m_b m_b') from the window's correlation of their modes
@@ -117,6 +117,10 @@ def bin_covariance(p: dict, edges: np.ndarray, n: np.ndarray) -> np.ndarray:
     pair = ok[:, None] & ok[None, :] & ~np.eye(ok.size, dtype=bool)
     with np.errstate(divide="ignore", invalid="ignore"):
         K[pair] = (2.0 * S / np.outer(m, m))[pair]
+    if model is not None and model[0] is not None:  # the lowest bins exactly, for the model spectrum
+        args = {k: v for k, v in model[1].items() if k not in ("edges", "q_max")}
+        exact, inside = processed_bin_covariance_area(model[0], edges=edges, q_max=p["q_max"], **args)
+        K[np.ix_(inside, inside)] = exact[np.ix_(inside, inside)]
     return K
 
 
@@ -147,8 +151,9 @@ def unbias_processing(p: dict, edges: np.ndarray, s: dict) -> dict:
                 window=hann_window_radial(*h.shape, sx, sy) if p["window"] == "hann" else None,
                 basis=detrend_basis(h.shape, DETREND_DEGREE[p["detrend"]]), periodic=p["periodic"])
     out = dict(s)
-    r1 = processing_bias_area(s["q"], s["C11"], s["n"], **args)
+    r1, model = processing_bias_area(s["q"], s["C11"], s["n"], **args, model=True)
     out["C11"] = s["C11"] / r1
+    out["model"] = (model, args)  # for bin_covariance: the spectrum's model and the map's processing
     if "C22" in s:
         r2 = processing_bias_area(s["q"], s["C22"], s["n"], **args)
         out["C22"], out["C12"] = s["C22"] / r2, s["C12"] / np.sqrt(r1 * r2)
