@@ -255,6 +255,98 @@ def expected_processed_psd_area(psd, nx, ny, sx, sy, window=None, basis=None, pe
     return E * ((sx / nx) * (sy / ny)) ** 2 / ((2.0 * np.pi) ** 2 * sx * sy)
 
 
+def _height_covariance_lags(psd, nx, ny, sx, sy, periodic):
+    """Covariance R(x - x') (m^2) of the heights at lags -n .. n-1 (wrapped on a 2nx x 2ny grid), the
+    inverse transform of the PSD on the lattice of a cell twice the map (once, ``periodic``)."""
+    m = 1 if periodic else 2
+    qx = 2.0 * np.pi * np.fft.fftfreq(m * nx, d=sx / nx)
+    qy = 2.0 * np.pi * np.fft.fftfreq(m * ny, d=sy / ny)
+    cell = np.fft.ifft2(psd(np.hypot(qx[:, None], qy[None, :]))).real
+    cell *= (m * nx) * (m * ny) * (2.0 * np.pi) ** 2 / (m * sx * m * sy)  # R(x) = sum_q C dq^2 e^{iqx}
+    lags = (np.r_[0:nx, -nx:0] % (m * nx), np.r_[0:ny, -ny:0] % (m * ny))
+    return cell[np.ix_(*lags)]
+
+
+def processed_bin_covariance_area(psd, nx, ny, sx, sy, edges, q_max, window=None, basis=None, periodic=False,
+                                  steps=4.0):
+    """Relative covariance of the binned periodogram of a detrended, windowed map, exactly, in its lowest bins.
+
+    With g = w (h - P h) (:func:`expected_processed_psd_area`) and Z_k = DFT(g)_k, the powers of a
+    Gaussian surface have cov(|Z_i|^2, |Z_j|^2) = |E Z_i Z_j*|^2 + |E Z_i Z_j|^2 (Isserlis), with
+
+    E Z_i Z_j* = DFT(w (I - P) R (I - P) (w e^{+i q_j x}))_i,
+
+    R the covariance of the heights (a convolution, by FFT). For bins b, b' symmetric under
+    q -> -q, the relative covariance of the bin means C_b (the modes of the full Fourier plane) is
+
+    cov(C_b, C_b') / (E C_b E C_b') = 2 sum_{i in b, j in b'} |E Z_i Z_j*|^2 / (P_b P_b'),
+    P_b = sum_{i in b} E|Z_i|^2.
+
+    Unlike the flat-spectrum correlation of :func:`roughcontact.physics.modes.window_pair_sums_area`,
+    it holds where the spectrum changes over the window's kernel (a roll-off a few lattice steps
+    from q = 0) and counts what the removed polynomial does to the lowest modes. Computed for the
+    modes within ``steps`` lattice steps of q = 0 (one convolution per mode).
+
+    Parameters
+    ----------
+    psd : callable
+        Model C(q) (m^4) of |q| (1/m), finite at q = 0.
+    nx, ny, sx, sy, window, basis, periodic
+        As :func:`expected_processed_psd_area`.
+    edges : array
+        Bin edges (1/m).
+    q_max : float
+        Highest wavenumber binned (1/m).
+    steps : float
+        Radius of the exactly computed region in lattice steps 2 pi / max(sx, sy).
+
+    Returns
+    -------
+    K : array (nb, nb)
+        Relative covariance (dimensionless) between the bins that lie wholly within the region;
+        NaN elsewhere.
+    inside : bool array (nb,)
+        The bins it covers (holding modes).
+    """
+    nb = edges.size - 1
+    ix, iy = np.fft.fftfreq(nx, 1.0 / nx).astype(int), np.fft.fftfreq(ny, 1.0 / ny).astype(int)
+    qq = 2.0 * np.pi * np.hypot(ix[:, None] / sx, iy[None, :] / sy)
+    reach = min(steps * 2.0 * np.pi / max(sx, sy), q_max)
+    b = np.searchsorted(edges, qq) - 1
+    inside_bins = (edges[1:] <= reach) & (np.bincount(b[(qq > 0) & (qq <= reach) & (b >= 0) & (b < nb)],
+                                                       minlength=nb)[:nb] > 0)
+    sel = (qq > 0) & (b >= 0) & (b < nb)
+    sel &= inside_bins[np.clip(b, 0, nb - 1)]
+    modes = np.argwhere(sel)  # (k, 2) lattice indices (a, c) into the fft2 layout
+    K = np.full((nb, nb), np.nan)
+    if modes.size == 0:
+        return K, inside_bins
+    w = np.ones((nx, ny)) if window is None else np.asarray(window, dtype=float)
+    FR = np.fft.fft2(_height_covariance_lags(psd, nx, ny, sx, sy, periodic))
+    ax, ay = np.arange(nx)[:, None], np.arange(ny)[None, :]
+    B = None if basis is None else np.asarray(basis, dtype=float).reshape(len(basis), -1)
+
+    def project_out(f):
+        if B is None:
+            return f
+        flat = f.reshape(-1)
+        return (flat - B.T @ (B @ flat)).reshape(f.shape)
+
+    Sigma = np.zeros((len(modes), len(modes)), dtype=complex)
+    for k, (a, c) in enumerate(modes):
+        u = project_out(w * np.exp(2j * np.pi * (ix[a] * ax / nx + iy[c] * ay / ny)))
+        v = np.fft.ifft2(FR * np.fft.fft2(u, s=(2 * nx, 2 * ny)))[:nx, :ny]
+        Sigma[:, k] = np.fft.fft2(w * project_out(v))[modes[:, 0], modes[:, 1]]
+    mode_bin = b[modes[:, 0], modes[:, 1]]
+    power = np.bincount(mode_bin, weights=Sigma.diagonal().real, minlength=nb)[:nb]
+    pair = np.abs(Sigma) ** 2
+    onehot = (mode_bin[:, None] == np.arange(nb)[None, :]).astype(float)
+    S = onehot.T @ pair @ onehot
+    ok = np.flatnonzero(inside_bins)
+    K[np.ix_(ok, ok)] = 2.0 * S[np.ix_(ok, ok)] / np.outer(power[ok], power[ok])
+    return K, inside_bins
+
+
 def rolloff_fit(q, C, n):
     """Least-squares fit of C = C0 (1 + (q/q0)^2)^(-a/2) to binned PSDs, in log C with weights n.
 
@@ -296,7 +388,7 @@ FIT_FROM = 2.0
 
 
 def processing_bias_area(q, C, n, nx, ny, sx, sy, edges, q_max, window=None, basis=None, periodic=False,
-                         iterations=2):
+                         iterations=2, model=False):
     """Per bin, the factor by which detrending and a window bias the binned PSD of a map.
 
     r_b = <E psd_map(g)>_b / <C>_b, the bin means over the modes of :func:`binned_spectra_area`
@@ -322,19 +414,23 @@ def processing_bias_area(q, C, n, nx, ny, sx, sy, edges, q_max, window=None, bas
     iterations : int
         Fixed-point iterations of the model.
 
+    model : bool
+        Return the model spectrum too.
+
     Returns
     -------
     array over the bins
-        r (dimensionless; 1 in empty bins): divide the binned PSD by it.
+        r (dimensionless; 1 in empty bins): divide the binned PSD by it; with ``model``, the pair
+        (r, the last model C(q) of |q|, m^4; None with fewer than two valid bins).
     """
     nb = edges.size - 1
     idx, wcol, count, _ = area_lattice(nx, ny, sx, sy, edges, q_max)
     qk = np.hypot(2.0 * np.pi * np.fft.fftfreq(nx, d=sx / nx)[:, None],
                   2.0 * np.pi * np.fft.rfftfreq(ny, d=sy / ny)[None, :])
     ok = np.isfinite(C) & (C > 0) & np.isfinite(q)
-    r = np.ones(nb)
+    r, psd = np.ones(nb), None
     if np.count_nonzero(ok) < 2:
-        return r
+        return (r, psd) if model else r
     sl = slice(1, nb + 1)
     for _ in range(iterations):
         fit = ok & (q >= FIT_FROM * 2.0 * np.pi / max(sx, sy))
@@ -344,7 +440,7 @@ def processing_bias_area(q, C, n, nx, ny, sx, sy, edges, q_max, window=None, bas
         with np.errstate(invalid="ignore", divide="ignore"):
             r = np.where(count[sl] > 0, bincount(idx, E * wcol, nb + 1)[sl] / bincount(idx, psd(qk) * wcol, nb + 1)[sl],
                          1.0)
-    return r
+    return (r, psd) if model else r
 
 
 def second_surface_hurst(spectra, hurst1, hurst2):

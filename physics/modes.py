@@ -64,15 +64,65 @@ def _bin_index(q, edges, q_max):
     return b
 
 
+def window_pair_sums_area(nx, ny, sx, sy, edges, q_max, w, box=192):
+    """Per pair of bins (b, b'), the sum over their modes of the squared correlations the window gives.
+
+    S_bb' = sum over modes i of bin b and j of bin b' (full Fourier plane) of |rho(q_i - q_j)|^2
+    (:func:`window_lags`; |rho(0)|^2 = 1). For a Gaussian surface whose spectrum is smooth on the
+    scale of the window's kernel, the binned means of the periodogram C_b (m_b modes) have
+    relative covariance cov(C_b, C_b') / (C_b C_b') = 2 S_bb' / (m_b m_b'). S is summed exactly over
+    the whole Fourier plane (lags wrapping around) for maps of up to 2 ``box`` points a side; for
+    larger maps over the modes within ``box`` lattice steps of the origin (the thin low-q bins, where
+    it matters), and a bin reaching beyond is flagged not ``exact``.
+
+    Parameters
+    ----------
+    nx, ny, sx, sy, edges, q_max, w, box
+        As :func:`window_mode_factor_area`.
+
+    Returns
+    -------
+    S : array (nb, nb)
+        The pair sums (dimensionless, symmetric).
+    m : array (nb,)
+        Modes of each bin in the full Fourier plane (within the box for large maps).
+    exact : bool array (nb,)
+        Whether bin b lies within the exactly summed region.
+    F : float
+        The wide-bin factor of :func:`window_lags`.
+    """
+    lags, rho2, F = window_lags(w)
+    reach = int(np.abs(lags).max()) if lags.size else 0
+    whole = nx <= 2 * box and ny <= 2 * box  # the whole Fourier plane, lags wrapping around
+    if whole:
+        ix, iy = np.fft.fftfreq(nx, 1.0 / nx), np.fft.fftfreq(ny, 1.0 / ny)
+    else:
+        bx, by = min(box, nx // 2 - 1), min(box, ny // 2 - 1)
+        ix, iy = np.arange(-bx, bx + 1), np.arange(-by, by + 1)
+    b = _bin_index(2.0 * np.pi * np.hypot(ix[:, None] / sx, iy[None, :] / sy), edges, q_max)
+    nb = edges.size - 1
+    m = np.bincount(b[b >= 0], minlength=nb).astype(float)
+    S = np.diag(m)
+    for (dx, dy), r2 in zip(lags, rho2, strict=True):
+        if whole:
+            a, c = b, np.roll(b, (-dx, -dy), axis=(0, 1))
+        else:
+            a = b[max(0, -dx):b.shape[0] - max(0, dx), max(0, -dy):b.shape[1] - max(0, dy)]
+            c = b[max(0, dx):b.shape[0] - max(0, -dx), max(0, dy):b.shape[1] - max(0, -dy)]
+        both = (a >= 0) & (c >= 0)
+        S += r2 * np.bincount(a[both] * nb + c[both], minlength=nb * nb).reshape(nb, nb)
+    inner = np.inf if whole else 2.0 * np.pi * min((bx - reach) / sx, (by - reach) / sy)
+    exact = (np.minimum(edges[1:], q_max) <= inner) | (edges[:-1] >= q_max)
+    return S, m, exact, F
+
+
 def window_mode_factor_area(nx, ny, sx, sy, edges, q_max, w, box=192, neighbours=False):
     """Per bin, the factor by which a window divides the independent modes of a map.
 
     Var(bin mean) = 2 S C^2 / m^2 with m the bin's modes in the full Fourier plane and
-    S = sum over pairs (i, j) of the bin of |rho(q_i - q_j)|^2, so n_eff = m^2 / (2 S) and the
-    factor n / n_eff = 2 n S / m^2 with n = m / 2. S is summed exactly over the whole Fourier
-    plane (lags wrapping around) for maps of up to 2 ``box`` points a side; for larger maps
-    over the modes within ``box`` lattice steps of the origin (the thin low-q bins, where it
-    matters), and a bin reaching beyond gets the wide-bin factor F of :func:`window_lags`.
+    S = sum over pairs (i, j) of the bin of |rho(q_i - q_j)|^2 (:func:`window_pair_sums_area`,
+    S_bb), so n_eff = m^2 / (2 S) and the factor n / n_eff = 2 n S / m^2 with n = m / 2. A bin
+    beyond the exactly summed region gets the wide-bin factor F of :func:`window_lags`.
 
     Parameters
     ----------
@@ -89,40 +139,18 @@ def window_mode_factor_area(nx, ny, sx, sy, edges, q_max, w, box=192, neighbours
     box : int
         Half-width (lattice steps) of the exactly summed region.
     neighbours : bool
-        Count each mode's correlations with the modes of every bin, not only its own: the
-        variance a bin contributes to a sum over neighbouring bins (what errors drawn
-        independently per bin must carry for integrals of the spectrum); larger than the
-        bin's own factor where bins are a few lattice steps wide.
+        Count each mode's correlations with the modes of every bin, not only its own (the row
+        sum of S): an upper bound of the variance a bin contributes to a sum over bins, exact
+        only where that sum weighs correlated modes alike.
 
     Returns
     -------
     array (len(edges) - 1,)
         Factor >= 1 (1 where a bin has no modes).
     """
-    lags, rho2, F = window_lags(w)
-    reach = int(np.abs(lags).max()) if lags.size else 0
-    whole = nx <= 2 * box and ny <= 2 * box  # the whole Fourier plane, lags wrapping around
-    if whole:
-        ix, iy = np.fft.fftfreq(nx, 1.0 / nx), np.fft.fftfreq(ny, 1.0 / ny)
-    else:
-        bx, by = min(box, nx // 2 - 1), min(box, ny // 2 - 1)
-        ix, iy = np.arange(-bx, bx + 1), np.arange(-by, by + 1)
-    b = _bin_index(2.0 * np.pi * np.hypot(ix[:, None] / sx, iy[None, :] / sy), edges, q_max)
-    nb = edges.size - 1
-    m = np.bincount(b[b >= 0], minlength=nb).astype(float)
-    S = m.copy()
-    for (dx, dy), r2 in zip(lags, rho2, strict=True):
-        if whole:
-            a, c = b, np.roll(b, (-dx, -dy), axis=(0, 1))
-        else:
-            a = b[max(0, -dx):b.shape[0] - max(0, dx), max(0, -dy):b.shape[1] - max(0, dy)]
-            c = b[max(0, dx):b.shape[0] - max(0, -dx), max(0, dy):b.shape[1] - max(0, -dy)]
-        same = (a >= 0) & ((c >= 0) if neighbours else (a == c))
-        S += r2 * np.bincount(a[same], minlength=nb)
-    inner = np.inf if whole else 2.0 * np.pi * min((bx - reach) / sx, (by - reach) / sy)
-    exact = (np.minimum(edges[1:], q_max) <= inner) | (edges[:-1] >= q_max)
+    S, m, exact, F = window_pair_sums_area(nx, ny, sx, sy, edges, q_max, w, box)
     with np.errstate(invalid="ignore", divide="ignore"):
-        factor = np.where(m > 0, S / m, 1.0)
+        factor = np.where(m > 0, (S.sum(axis=1) if neighbours else np.diag(S)) / m, 1.0)
     return np.maximum(np.where(exact, factor, F), 1.0)
 
 

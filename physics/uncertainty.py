@@ -223,7 +223,16 @@ def combined_psd_error(C1, C2, eta, s1, s2, s_eta):
 # ----------------------------------------------------------------------------------------
 
 
-def psd_draws(C, modes, draws, seed, stream):
+def _correlation_root(correlation):
+    """A matrix R with R R^T = ``correlation`` (its negative eigenvalues, from rounding or from a
+    matrix assembled of pair sums, set to 0; rows rescaled to a unit diagonal): z = R xi, xi standard
+    normal, has that correlation."""
+    lam, V = np.linalg.eigh(correlation)
+    root = V * np.sqrt(np.clip(lam, 0.0, None))
+    return root / np.sqrt(np.maximum(np.sum(root * root, axis=1), 1e-300))[:, None]
+
+
+def psd_draws(C, modes, draws, seed, stream, correlation=None):
     """Binned PSDs drawn within their statistical band.
 
     A bin's mean of n independent exponential mode powers is C_true Gamma(n, 1)/n. Given the
@@ -234,9 +243,13 @@ def psd_draws(C, modes, draws, seed, stream):
     q-integrals behind every prediction), the sum of many bins' contributions, is centred on
     its unbiased estimate. (The Jeffreys-prior posterior, shape n, has mean C n / (n - 1): over
     many bins of 5-50 modes it shifts such sums by a percent or more, several times their
-    standard error, and its bands under-cover.) Bins are independent. Draw 0 is the
-    measurement itself; draw d > 0 uses the random stream (seed, stream, d), so a draw does not
-    depend on which other draws are computed with it (chunks).
+    standard error, and its bands under-cover.) Without ``correlation`` bins are independent.
+    With it (a window correlates the modes of neighbouring bins), the bins' gamma variates are
+    joined by a Gaussian copula: g_b = F_b^-1(Phi(z_b)), z normal with that correlation, F_b the
+    Gamma(n_b + 1) distribution function; each bin keeps its marginal, and neighbouring bins
+    move together as the measurement's do. Draw 0 is the measurement itself; draw d > 0 uses
+    the random stream (seed, stream, d), so a draw does not depend on which other draws are
+    computed with it (chunks).
 
     Parameters
     ----------
@@ -248,30 +261,41 @@ def psd_draws(C, modes, draws, seed, stream):
         Draw indices.
     seed, stream : int
         Random seed of the scene and the quantity's stream (one per surface).
+    correlation : array (m, m) or None
+        Correlation matrix of the bins' errors (dimensionless).
 
     Returns
     -------
     array draws.shape + (m,)
         Drawn PSDs (m^4).
+
+    References
+    ----------
+    Nelsen, An Introduction to Copulas (2006), section 2.3 (Gaussian copula); docs/measured-data.md.
     """
     flat = np.ravel(draws).astype(int)
     out = np.empty((flat.size, C.size))
+    root = None if correlation is None else _correlation_root(correlation)
     for i, d in enumerate(flat):
         if d == 0:
             out[i] = C
+            continue
+        rng = np.random.default_rng([int(seed), int(stream), int(d)])
+        if root is None:
+            g = rng.gamma(modes + 1.0)
         else:
-            g = np.random.default_rng([int(seed), int(stream), int(d)]).gamma(modes + 1.0)
-            out[i] = C * modes / g
+            g = special.gammaincinv(modes + 1.0, special.ndtr(root @ rng.standard_normal(C.size)))
+        out[i] = C * modes / g
     return out.reshape(np.shape(draws) + (C.size,))
 
 
-def psd_draws_on_grid(draws, q_grid, q, C, modes, how, seed, stream):
+def psd_draws_on_grid(draws, q_grid, q, C, modes, how, seed, stream, correlation=None):
     """:func:`psd_draws` put on ``q_grid`` with
     :func:`roughcontact.physics.estimators.binned_psd_on_grid` and made unbiased by
     :func:`interpolation_unbiasing` (m^4), shape draws.shape + (len(q_grid),); draw 0 is the
     measured PSD on the grid."""
     flat = np.ravel(draws).astype(int)
-    binned = psd_draws(C, modes, flat, seed, stream)
+    binned = psd_draws(C, modes, flat, seed, stream, correlation)
     a, b, t, inside = grid_weights(q_grid, q, how)
     with np.errstate(divide="ignore"):
         logs = np.log(binned)

@@ -222,6 +222,9 @@ def compute_bem(inp: StageInput) -> xr.Dataset:
         ds["area_ratio_theory_to_bem"] = (("p", "eta"), t_area / ds["bem_contact_area_ratio_mean"].values)
         ds["separation_ratio_theory_to_bem"] = (("p", "eta"), t_gap / ds["bem_mean_gap_mean"].values)
     ds = with_variants(inp, ds, psd, q, zeta_bem, p_values, has_eta, E_star)
+    # the theory_* columns' theory, as the contact and separation stages that computed them say it
+    ds.attrs["contact_correction"] = contact["contact_area_ratio"].attrs.get("correction", "persson")
+    ds.attrs.update({k: v for k, v in separation.attrs.items() if k.startswith("separation_refinement")})
     if set(PLASTIC) & inp.wanted:
         ds = with_hardness(inp, ds, band, q, C1, C2, E_star, p_values, eta_values, G_pe)
     ds = fields.add_to(ds, p_values)
@@ -252,7 +255,7 @@ _THEORY = "at the BEM's magnification bem_zeta"
 register(
     Stage(
         name="bem",
-        version="4",  # contact.yield_stress (default none) adds optional outputs only
+        version="5",  # 4: contact.yield_stress (optional outputs only); 5: records the theory columns' theory
         compute=compute_bem,
         check=check_bem,
         describe=describe_bem,

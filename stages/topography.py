@@ -29,8 +29,10 @@ from roughcontact.stage import Figure, Param, Shape, Stage, StageInput, UserErro
 from .figures.topography import figure_coherence, figure_measured_psd
 from .shared.maps import topography_files
 from .shared.measured import (
+    bin_covariance,
     container_files,
     measurements_entered,
+    merged_correlation,
     merged_psd,
     mode_factor,
     prepared_files,
@@ -54,6 +56,9 @@ def _spectra(p, edges, spec, other=None):
         s = unbias_processing(p, edges, binned_spectra_area(p["h"], p["sizes"][0], p["sizes"][1], edges, p["q_max"],
                                                             h2))
     s["n"] = s["n"] / mode_factor(p, edges)  # a window correlates neighbouring modes
+    s["K"] = bin_covariance(p, edges, s["n"], s.pop("model", None))  # within a bin and across neighbouring bins
+    with np.errstate(divide="ignore"):  # the lowest bins' variance computed exactly
+        s["n"] = np.where(np.diag(s["K"]) > 0, 1.0 / np.where(np.diag(s["K"]) > 0, np.diag(s["K"]), 1.0), s["n"])
     return s
 
 
@@ -135,7 +140,7 @@ def _paired_spectra(prepared, specs, edges):
         if p["analysis"] == "profiles":
             s = second_surface_hurst(s, specs["substrate"]["hurst"], specs["solid"]["hurst"])
         joint.append(s)
-    return {"substrate": joint, "solid": [{"n": s["n"], "q": s["q"], "C11": s["C22"]} for s in joint]}
+    return {"substrate": joint, "solid": [{"n": s["n"], "q": s["q"], "C11": s["C22"], "K": s["K"]} for s in joint]}
 
 
 def _surface_vars(name, spectra, described, bpd, entered):
@@ -155,11 +160,12 @@ def _surface_vars(name, spectra, described, bpd, entered):
                                  "fit to its bins over the fit (docs/measured-data.md); line scans and periodic "
                                  "unwindowed maps unchanged"}
     estimate = ("C / sqrt(n), n the independent modes (Gaussian random-phase statistics; a window's correlation "
-                "of neighbouring modes counted, for maps also across neighbouring bins, which the bands draw "
-                "independently), times the Birge ratio where the files disagree beyond it (chi-square "
+                "of the modes within a bin counted; that across neighbouring bins is psd_<surface>_measured_"
+                "correlation), times the Birge ratio where the files disagree beyond it (chi-square "
                 "test at 1 %); correlated profiles make it an underestimate")
     return {f"psd_{name}_measured": (C, common), f"psd_{name}_measured_error": (err, {"estimate": estimate}),
-            f"q_{name}_measured": (q, {}), f"modes_{name}": (n, {}), f"psd_{name}_measured_spread": (ratio, {})}, n > 0
+            f"q_{name}_measured": (q, {}), f"modes_{name}": (n, {}), f"psd_{name}_measured_spread": (ratio, {}),
+            f"psd_{name}_measured_correlation": (merged_correlation(spectra), {})}, n > 0
 
 
 def _prepared(inp: StageInput):
@@ -201,7 +207,8 @@ def describe_topography(inp: StageInput) -> Shape:
     variables = {f"{kind}_{name}_measured" for name in specs for kind in ("psd", "q")}
     variables |= {"coherence", "cross_psd_measured", "coherence_error"} if paired else set()
     pairing = "paired" if paired else f"not paired: {pair_note}" if pair_note else "not paired: one surface only"
-    return Shape(sizes={"q_bin": int(np.ptp(np.flatnonzero(bins))) + 1}, ranges=ranges,
+    size = int(np.ptp(np.flatnonzero(bins))) + 1
+    return Shape(sizes={"q_bin": size, "q_bin_pair": size}, ranges=ranges,
                  variables=frozenset(variables), attrs={"pairing": pairing}, values=values, approximate=tuple(values))
 
 
@@ -230,7 +237,8 @@ def compute_topography(inp: StageInput) -> xr.Dataset:
         data_vars.update(cross_psd_measured=(C12, {}), coherence=(eta, {}), coherence_error=(eta_err, {}))
     sel = np.flatnonzero(keep)
     sl = slice(sel[0], sel[-1] + 1)
-    ds = xr.Dataset({k: (("q_bin",), v[sl], a) for k, (v, a) in data_vars.items()}, coords={"q_bin": centres[sl]})
+    ds = xr.Dataset({k: (("q_bin", "q_bin_pair")[:np.ndim(v)], v[(sl,) * np.ndim(v)], a)
+                     for k, (v, a) in data_vars.items()}, coords={"q_bin": centres[sl], "q_bin_pair": centres[sl]})
     ds.attrs["bins_per_decade"] = bpd
     ds.attrs["pairing"] = ("paired: file i of the substrate with file i of the solid" if paired else
                            f"not paired: {pair_note}" if pair_note else "not paired: one surface only")
@@ -249,7 +257,7 @@ def _empty(surface: str, about: str = "") -> dict:
 register(
     Stage(
         name="topography",
-        version="4",
+        version="5",
         compute=compute_topography,
         # of a measured surface the map keys and the line-scan H; of any other surface only its kind
         # (a fitted surface of maps or a container: the same keys, and what it is fitted to)
@@ -274,6 +282,12 @@ register(
                                                attrs=_empty(s, f"Birge ratio sqrt(chi^2/(k-1)) of the spread between "
                                                                f"the {s}'s k files in the bin (about 1 when they "
                                                                "agree within their errors)")) for s in SURFACES},
+            **{f"psd_{s}_measured_correlation": Var(
+                "1", f"{s}'s PSD error correlation between bins",
+                attrs=_empty(s, "correlation of the statistical errors of the bins q_bin and q_bin_pair: a window "
+                                "correlates the Fourier modes of neighbouring bins (2 S_bb' / (m_b m_b') over the "
+                                "relative variances, merged over the files with their weights); the bands' draws "
+                                "carry it")) for s in SURFACES},
             "cross_psd_measured": Var("m^4", "measured cross-spectrum Re C12 of the pair",
                                       attrs=_empty("pair", "Persson convention")),
             "coherence": Var("1", "measured coherence eta(q)",
@@ -282,7 +296,9 @@ register(
                                    attrs=_empty("pair", "statistical standard error of the coherence, "
                                                         "(1 - eta^2) / sqrt(2 n)")),
         },
-        coords={"q_bin": Var("1/m", "wavenumber (geometric bin centre)")},
+        coords={"q_bin": Var("1/m", "wavenumber (geometric bin centre)"),
+                "q_bin_pair": Var("1/m", "wavenumber of the paired bin",
+                                  attrs={"comment": "the second bin of a pair of bins q_bin (same lattice)"})},
         figures=(
             Figure("measured_psd", "Measured PSDs", ("topography",), figure_measured_psd),
             Figure("coherence", "Measured coherence eta(q)", ("topography",), figure_coherence),

@@ -61,6 +61,88 @@ def test_draws_are_centred_on_the_measurement_with_the_inverse_gamma_spread():
     assert not np.array_equal(psd_draws(C, n, np.array([5]), 7, 2)[0], draws[5])  # another surface, another stream
 
 
+def test_correlated_draws_keep_each_bins_law_and_carry_the_correlation():
+    """With a correlation between bins (a window's), each bin's draws keep their inverse-gamma law
+    (mean C, same quantiles) and the bins' normal scores have the given correlation; draw 0 is C."""
+    C, n = np.array([2.0, 5.0, 1.0]), np.array([3.0, 40.0, 1.5])
+    R = np.array([[1.0, 0.6, 0.3], [0.6, 1.0, 0.0], [0.3, 0.0, 1.0]])
+    draws = psd_draws(C, n, np.arange(8001), seed=7, stream=1, correlation=R)
+    assert np.array_equal(draws[0], C)
+    d = draws[1:]
+    for k in range(3):
+        law = scipy.stats.invgamma(n[k] + 1, scale=C[k] * n[k])
+        assert np.allclose(np.quantile(d[:, k], [0.05, 0.5, 0.95]), law.ppf([0.05, 0.5, 0.95]), rtol=0.04)
+    assert abs(d[:, 1].mean() - C[1]) < 4 * C[1] / np.sqrt(n[1] - 1) / np.sqrt(d.shape[0])
+    scores = scipy.stats.norm.ppf(scipy.stats.invgamma(n + 1, scale=C * n).sf(d))
+    assert np.allclose(np.corrcoef(scores.T), R, atol=0.03)
+
+
+def test_window_correlates_neighbouring_bins_as_predicted():
+    """Hann-windowed crops of a larger random surface: the correlation between the binned PSDs of
+    neighbouring low-q bins over 300 crops is the predicted 2 S_bb' / (m_b m_b') over the relative
+    variances (bin_covariance), within the Monte-Carlo error, where it is large (0.3-0.8)."""
+    from roughcontact.physics.preprocessing import hann_window_radial
+    from roughcontact.stages.shared.measured import bin_covariance, mode_factor
+
+    rng = np.random.default_rng(11)
+    n, side = 48, 1.0
+    edges = log_bin_edges(2 * np.pi / side, np.pi * n / side, 20)
+    q_max = np.pi * n / side
+    w = hann_window_radial(n, n, side, side)
+
+    def psd(q):  # flat over the lowest bins (roll-off at 8 lattice steps)
+        return self_affine(q, 0.8, 2 * np.pi * 8 / side, 1.0)
+
+    values = []
+    for _ in range(300):
+        h = synthesize(psd, 4 * n, 4 * n, 4 * side, 4 * side, rng)[:n, :n]
+        r = binned_spectra_area((h - h.mean()) * w, side, side, edges, q_max)
+        values.append(r["C11"])
+    values = np.array(values)
+    p = {"window": "hann", "analysis": "area", "h": np.zeros((n, n)), "sizes": (side, side), "q_max": q_max}
+    K = bin_covariance(p, edges, r["n"] / mode_factor(p, edges))  # the effective modes, as the topography stage
+    with np.errstate(invalid="ignore", divide="ignore"):
+        predicted = K / np.sqrt(np.outer(np.diag(K), np.diag(K)))
+    ok = np.flatnonzero(r["n"] > 0)[:8]  # the lowest bins: lattice steps 1 to about 3
+    measured = np.corrcoef(values[:, ok].T)
+    pairs = [(i, j) for i in range(ok.size) for j in range(i + 1, ok.size) if predicted[ok[i], ok[j]] > 0.3]
+    assert len(pairs) >= 3
+    for i, j in pairs:
+        assert abs(measured[i, j] - predicted[ok[i], ok[j]]) < 0.12, (i, j, measured[i, j], predicted[ok[i], ok[j]])
+
+
+def test_lowest_bins_covariance_of_detrended_windowed_crops_is_exact():
+    """Plane-detrended, Hann-windowed crops of a surface that rolls off 2 lattice steps above q = 0
+    (the spectrum changes by 2-3 over the window's kernel): the correlation and variance of the
+    lowest bins over 400 crops are those of processed_bin_covariance_area, within the Monte-Carlo
+    error, where the flat-spectrum correlation is off by up to 0.2."""
+    from roughcontact.physics.estimators import processed_bin_covariance_area
+    from roughcontact.physics.preprocessing import detrend, detrend_basis, hann_window_radial
+
+    rng = np.random.default_rng(12)
+    n, side = 32, 1.0
+    edges = log_bin_edges(2 * np.pi / side, np.pi * n / side, 20)
+    q_max = np.pi * n / side
+    w = hann_window_radial(n, n, side, side)
+
+    def psd(q):
+        return self_affine(q, 0.5, 2 * np.pi * 2 / side, 1.0)
+
+    values = []
+    for _ in range(400):
+        h = synthesize(psd, 4 * n, 4 * n, 4 * side, 4 * side, rng)[:n, :n]
+        values.append(binned_spectra_area(detrend(h, 1) * w, side, side, edges, q_max)["C11"])
+    values = np.array(values)
+    K, inside = processed_bin_covariance_area(psd, n, n, side, side, edges, q_max, window=w,
+                                              basis=detrend_basis((n, n), 1))
+    ok = np.flatnonzero(inside)
+    assert ok.size >= 5
+    rel = values[:, ok] / values[:, ok].mean(axis=0)
+    assert np.allclose(rel.var(axis=0) / np.diag(K)[ok], 1.0, atol=0.3)  # heavy-tailed: few modes per bin
+    predicted = K[np.ix_(ok, ok)] / np.sqrt(np.outer(np.diag(K)[ok], np.diag(K)[ok]))
+    assert np.abs(np.corrcoef(values[:, ok].T) - predicted).max() < 0.12
+
+
 def test_few_mode_bins_follow_the_chi_square_law_and_their_draws_cover_one_bin():
     """A periodic map's bin of n modes: C_hat / C is chi-square with 2n degrees of freedom over
     2n (mean 1, variance 1/n; 4000 maps, n = 2 and 4); the 90 % interval of the draws

@@ -7,7 +7,9 @@ refuses the value with a one-line UserError naming a key, in the preflight; neve
 error), its content key differs from the default value's, and the result says which theory it
 used (a global attribute named after the option, or that name + "_source"). Facts a user relies
 on: an option accepted by one stage does not crash another, and a result computed under one
-option value is never reused for another.
+option value is never reused for another. Every stage with a choice option has a small scene here
+(the BEM stages on 32^2 maps, one pair). The choices of a measured surface (map or container,
+substrate or solid) and of a PSD file's convention are followed through to the contact stage.
 """
 
 from __future__ import annotations
@@ -62,12 +64,24 @@ SCENES: dict[str, dict] = {
                           numerics={"points_per_decade": 10, "interface_bem_bisections": 2}),
 }
 SCENES["bands"].update({k: SCENES["friction"][k] for k in ("material", "load", "modulus", "friction")})
+#: the validation stages' cases, cut to one H, bandwidth 4 on 16^2 and 32^2 lattices, one pair, two loads
+_VALIDATION = {"hurst": [0.8], "bandwidth": [4.0], "reduced_pressure": [0.01, 0.1], "pixels_per_wavelength": [4.0, 8.0],
+               "max_grid": 32, "realizations": 1}
+SCENES.update({
+    # the BEM check of the contact stage on one 32^2 pair (bem.surfaces = measured has no measured maps here:
+    # refused in the preflight)
+    "bem": dict(outputs={"variables": ["bem_contact_area_ratio"]}, bem=dict(_BEM), contact={"zeta": [8.0]},
+                substrate={"q0": "8e8 1/m"}, solid={"q0": "8e8 1/m"}),
+    "validation_bem": dict(outputs={"variables": ["validation_deviation_max"]}, validation=dict(_VALIDATION)),
+    "validation": dict(outputs={"variables": ["validation_deviation_max"]}, validation=dict(_VALIDATION)),
+})
 #: stages that depend on a choice option but need inputs this test does not build (say why)
-NOT_COVERED = {
-    "bem": "the BEM check of the contact stage (tamaas); its contact.correction is tested in tests/test_bem.py",
-    "validation_bem": "lattice BEM validation (tamaas); tested in tests/test_validation.py",
-    "validation": "lattice BEM validation (tamaas); tested in tests/test_validation.py",
-}
+NOT_COVERED: dict[str, str] = {}
+#: stages that set every theory variant side by side (the coordinate theory): the option picks which
+#: variant takes the scene's contact.gamma, said in the attribute theory_variants
+VARIANTS_SIDE_BY_SIDE = {"validation"}
+#: stages whose every case needs the optional BEM solver
+NEEDS_TAMAAS = {"bem", "interface_bem", "validation_bem", "validation"}
 
 
 def _choices() -> dict[str, tuple]:
@@ -143,7 +157,7 @@ def _default_key(stage, tmp_path_factory) -> str:
 
 @pytest.mark.parametrize("stage, key, value", CASES, ids=[f"{s}-{k}={v}" for s, k, v in CASES])
 def test_stage_follows_the_option(stage, key, value, tmp_path_factory):
-    if stage == "interface_bem":
+    if stage in NEEDS_TAMAAS:
         pytest.importorskip("tamaas")
     default_key = _default_key(stage, tmp_path_factory)  # the small scene itself runs
     try:
@@ -163,7 +177,9 @@ def test_stage_follows_the_option(stage, key, value, tmp_path_factory):
     if (key, value) in SAYS:
         attr, text = SAYS[key, value]
         assert text in str(ds.attrs.get(attr, "none")), (attr, ds.attrs.get(attr))
-    if key in {"contact.correction", "separation.refinement"} and stage != "contact":
+    if key in {"validation.lattice", "bem.surfaces"}:  # the stage's attribute names the choice (auto: the one taken)
+        assert ds.attrs[attr] in ((value,) if value != "auto" else ("synthesized", "measured")), (attr, ds.attrs[attr])
+    if key in {"contact.correction", "separation.refinement"} and stage not in {"contact", *VARIANTS_SIDE_BY_SIDE}:
         said = f"{ds.attrs.get(attr, '')} {ds.attrs.get(attr + '_source', '')}"
         assert str(value) in said or (key == "separation.refinement" and value == "contact"
                                        and "contact.correction" in said), (attr, said)
@@ -221,41 +237,93 @@ def test_friction_follows_the_modulus_kind_and_shift(name, tmp_path_factory):
     assert mod.attrs["vertical_shift"] == ("entropic" if name == "box-entropic" else "none")
 
 
-#: the [substrate] choices of a measured surface (kind topography: the built-in topography scene's maps)
-SURFACE_CHOICES = {key: values for key, values in _choices().items()
-                   if key.startswith("substrate.") and key.partition(".")[2] in
-                   {"fill_undefined", "analysis", "detrend", "window", "extend"}}
-SURFACE_CASES = [(key, value) for key, values in SURFACE_CHOICES.items() for value in values]
+#: the choices of a measured surface, per kind (topography: the built-in topography scene's map; container: the
+#: built-in container), for the substrate and for the solid (the same keys, read by the same stages)
+SURFACE_CHOICES = {(kind, name): tuple(p.choices) for kind, params in sections()["substrate"].variants.items()
+                   if kind in {"topography", "container"} for p in params if p.kind == "choice" for name in [p.name]}
+SURFACE_CASES = [(surface, kind, name, value) for surface in ("substrate", "solid")
+                 for (kind, name), values in SURFACE_CHOICES.items() for value in values]
+_MEASURED = {"topography": {"kind": "topography", "files": [str(DATA / "substrate_map.npy")], "height_unit": "nm",
+                            "size_x": "20 um", "periodic": False},
+             "container": {"kind": "container", "container": str(DATA / "substrate.zip")}}
 
 
-def _topography(key=None, value=None) -> dict:
-    raw = make_scene(substrate={"kind": "topography", "files": [str(DATA / "substrate_map.npy")], "height_unit": "nm",
-                                "size_x": "20 um", "periodic": False},
-                     solid={"kind": "smooth"}, interface={"eta": 0.0}, material={"E": "10 MPa", "nu": 0.5},
+def _measured(surface="substrate", kind="topography", name=None, value=None) -> dict:
+    """A measured ``surface`` (the other one smooth) of ``kind``, with option ``name`` set to ``value``."""
+    other = "solid" if surface == "substrate" else "substrate"
+    raw = make_scene(**{surface: dict(_MEASURED[kind]), other: {"kind": "smooth"}},
+                     interface={"eta": 0.0}, material={"E": "10 MPa", "nu": 0.5},
                      load={"p": ["10 kPa", "1 MPa"]}, contact={"zeta": [1.0, 10.0]},
                      outputs={"variables": ["contact_area_ratio"]}, numerics={"points_per_decade": 20})
-    if key is not None:
-        raw["substrate"][key.partition(".")[2]] = value
+    if name is not None:
+        raw[surface][name] = value
     return raw
 
 
-@pytest.mark.parametrize("key, value", SURFACE_CASES, ids=[f"{k}={v}" for k, v in SURFACE_CASES])
-def test_a_measured_surface_follows_its_options(key, value, tmp_path_factory):
-    """Every value of a measured surface's choice runs (or is refused in one line naming a key) through
-    to the contact stage; a value other than the default changes the contact key; the measured PSD
-    records the detrending, window and analysis it used (fill_undefined and extend are in the
-    result's ``parameters``: the map has no undefined points and the grid asks for no extension)."""
+def test_the_surface_cases_cover_both_kinds_and_both_surfaces():
+    names = {(s, k, n) for s, k, n, _ in SURFACE_CASES}
+    options = ("fill_undefined", "analysis", "detrend", "window", "extend")
+    for surface in ("substrate", "solid"):
+        assert {(surface, kind, n) for kind in ("topography", "container") for n in options} <= names
+
+
+def _surface_param(surface, kind, name, value):
+    """The solid's copies run in CI for the last value of each option (the same stages read the same keys of
+    either surface), the others with the slow tests."""
+    last = SURFACE_CHOICES[kind, name][-1]
+    marks = [pytest.mark.slow] if surface == "solid" and value != last else []
+    return pytest.param(surface, kind, name, value, marks=marks, id=f"{surface}-{kind}-{name}={value}")
+
+
+@pytest.mark.parametrize("surface, kind, name, value", [_surface_param(*case) for case in SURFACE_CASES])
+def test_a_measured_surface_follows_its_options(surface, kind, name, value, tmp_path_factory):
+    """Every value of a measured surface's choice, substrate or solid, map or container, runs (or is
+    refused in one line naming a key) through to the contact stage; a value other than the default
+    changes the contact key; the measured PSD records the detrending, window and analysis it used
+    (fill_undefined and extend are in the result's ``parameters``: the maps have no undefined points
+    and the grid asks for no extension)."""
     try:
-        res = _run(_topography(key, value), tmp_path_factory.mktemp(f"surface-{value}"))
+        res = _run(_measured(surface, kind, name, value), tmp_path_factory.mktemp(f"{surface}-{kind}-{value}"))
     except UserError as exc:
         assert exc.key and "\n" not in str(exc), exc
         return
-    if "topography" not in _DEFAULTS:
-        _DEFAULTS["topography"] = _run(_topography(), tmp_path_factory.mktemp("surface-default"))["contact"].attrs[
-            "stage_key"]
-    default = [p for ps in sections()["substrate"].variants.values() for p in ps if p.name == key.partition(".")[2]]
-    if value != default[0].default:
-        assert res["contact"].attrs["stage_key"] != _DEFAULTS["topography"]
-    name = key.partition(".")[2]
+    if (surface, kind) not in _DEFAULTS:
+        _DEFAULTS[surface, kind] = _run(_measured(surface, kind),
+                                        tmp_path_factory.mktemp(f"{surface}-{kind}-default"))["contact"].attrs["stage_key"]
+    default = [p for p in sections()[surface].variants[kind] if p.name == name][0].default
+    if value != default:
+        assert res["contact"].attrs["stage_key"] != _DEFAULTS[surface, kind]
     if name in {"detrend", "window", "analysis"}:
-        assert f'"{name}": "{value}"' in res["topography"]["psd_substrate_measured"].attrs["files"]
+        assert f'"{name}": "{value}"' in res["topography"][f"psd_{surface}_measured"].attrs["files"]
+
+
+CONVENTIONS = sections()["substrate"].variants["psd_file"]
+CONVENTION_CASES = [(surface, value) for surface in ("substrate", "solid")
+                    for value in [p for p in CONVENTIONS if p.name == "convention"][0].choices]
+
+
+@pytest.mark.parametrize("surface, convention", CONVENTION_CASES, ids=[f"{s}={c}" for s, c in CONVENTION_CASES])
+def test_a_psd_file_follows_its_convention(surface, convention, tmp_path_factory):
+    """Every convention of a PSD file (substrate or solid) runs to the contact stage, changes its key,
+    and the psd stage's PSD of that surface says which convention it read."""
+    import numpy as np
+
+    folder = tmp_path_factory.mktemp(f"psd-{surface}-{convention}")
+    q = np.geomspace(1e4, 1e8, 41)
+    C = 1e-30 * (q / 1e4) ** -3.6 * (1.0 if convention in {"persson", "contact.engineering"} else q / 1e4 * 1e-4)
+    np.savetxt(folder / "psd.txt", np.column_stack([q, C]),
+               header=f"q [1/m]  C [{'m^3' if convention.startswith('1d') else 'm^4'}]")
+    other = "solid" if surface == "substrate" else "substrate"
+    raw = make_scene(**{surface: {"kind": "psd_file", "path": str(folder / "psd.txt"), "convention": convention,
+                                  "hurst": 0.8},
+                        other: {"kind": "smooth"}},
+                     interface={"eta": 0.0}, material={"E": "10 MPa", "nu": 0.5}, load={"p": ["10 kPa", "1 MPa"]},
+                     contact={"zeta": [1.0, 10.0]}, grid={"q_min": "1e4 1/m", "q_max": "1e8 1/m"},
+                     outputs={"variables": ["contact_area_ratio"]}, numerics={"points_per_decade": 10})
+    res = _run(raw, folder / "out")
+    key = ("psd_file", surface)
+    if key not in _DEFAULTS:
+        raw[surface]["convention"] = "persson"
+        _DEFAULTS[key] = _run(raw, folder / "default")["contact"].attrs["stage_key"]
+    assert (res["contact"].attrs["stage_key"] != _DEFAULTS[key]) == (convention != "persson")
+    assert convention in res["psd"][f"psd_{surface}"].attrs["psd_convention"]

@@ -148,19 +148,23 @@ def process_map(p: dict, spec: dict) -> dict:
     return p
 
 
+def measured_bin_index(ds: xr.Dataset, name: str) -> np.ndarray:
+    """Indices (along q_bin) of the valid bins of surface ``name`` (finite q, PSD > 0), by increasing q."""
+    psd, q = ds[f"psd_{name}_measured"].values, ds[f"q_{name}_measured"].values
+    ok = np.flatnonzero(np.isfinite(psd) & (psd > 0) & np.isfinite(q))
+    return ok[np.argsort(q[ok])]
+
+
 def measured_bins(ds: xr.Dataset, name: str):
     """The topography stage's valid bins of surface ``name``: mean wavenumbers q (1/m,
     increasing), the PSD at q (m^4: the bin mean corrected for the curvature of the spectrum
     across the bin, :func:`roughcontact.physics.uncertainty.bin_curvature_factor`) and its
     standard error (m^4, same correction)."""
-    psd = ds[f"psd_{name}_measured"].values
-    ok = np.isfinite(psd) & (psd > 0) & np.isfinite(ds[f"q_{name}_measured"].values)
-    err = ds[f"psd_{name}_measured_error"].values[ok] if f"psd_{name}_measured_error" in ds else np.zeros(ok.sum())
-    q, C = ds[f"q_{name}_measured"].values[ok], psd[ok]
-    order = np.argsort(q)
-    q, C, err = q[order], C[order], err[order]
-    factor = bin_curvature_factor(q, C, int(ds.attrs.get("bins_per_decade", 20))) if q.size >= 2 else np.ones_like(q)
-    return q, C * factor, err * factor
+    index = measured_bin_index(ds, name)
+    psd, q = ds[f"psd_{name}_measured"].values[index], ds[f"q_{name}_measured"].values[index]
+    err = ds[f"psd_{name}_measured_error"].values[index] if f"psd_{name}_measured_error" in ds else np.zeros(q.size)
+    factor = bin_curvature_factor(q, psd, int(ds.attrs.get("bins_per_decade", 20))) if q.size >= 2 else np.ones_like(q)
+    return q, psd * factor, err * factor
 
 
 def measured_psd_on_grid(ds: xr.Dataset, name: str, q_grid: np.ndarray, how: str):

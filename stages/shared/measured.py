@@ -19,8 +19,8 @@ import json
 import numpy as np
 import xarray as xr
 
-from roughcontact.physics.estimators import merge_spectra, processing_bias_area
-from roughcontact.physics.modes import window_mode_factor_area, window_mode_factor_profiles
+from roughcontact.physics.estimators import merge_spectra, processed_bin_covariance_area, processing_bias_area
+from roughcontact.physics.modes import window_mode_factor_area, window_mode_factor_profiles, window_pair_sums_area
 from roughcontact.physics.preprocessing import detrend_basis, hann_window_1d, hann_window_radial
 from roughcontact.physics.uncertainty import (
     coherence_draws_on_grid,
@@ -31,7 +31,7 @@ from roughcontact.physics.uncertainty import (
 )
 from roughcontact.stage import FileInput, UserError
 
-from .maps import measured_bins, prepare_map, process_map
+from .maps import measured_bin_index, measured_bins, prepare_map, process_map
 from .surfaces import DETREND_DEGREE
 
 #: contact.engineering's detrend modes (SurfaceTopography) and the polynomial each removes
@@ -90,17 +90,51 @@ def prepared_files(name: str, spec: dict, files) -> list[dict]:
 
 
 def mode_factor(p: dict, edges: np.ndarray):
-    """Per bin, by how much the window of scan ``p`` divides its independent modes (1: no window).
-
-    For maps the modes' correlations with neighbouring bins are counted too: the bands draw
-    bins independently, and what they predict (G, u) sums over bins (issue 24)."""
+    """Per bin, by how much the window of scan ``p`` divides its independent modes (1: no window):
+    the correlations of a bin's modes among themselves. Those with the modes of other bins are
+    carried by :func:`bin_covariance` (issue 24)."""
     if p["window"] != "hann":
         return 1.0
     h, sizes = p["h"], p["sizes"]
     if p["analysis"] == "profiles":
         return window_mode_factor_profiles(h.shape[0], sizes[0], edges, p["q_max"], hann_window_1d(h.shape[0]))
-    return window_mode_factor_area(*h.shape, *sizes, edges, p["q_max"], hann_window_radial(*h.shape, *sizes),
-                                   neighbours=True)
+    return window_mode_factor_area(*h.shape, *sizes, edges, p["q_max"], hann_window_radial(*h.shape, *sizes))
+
+
+def bin_covariance(p: dict, edges: np.ndarray, n: np.ndarray, model=None) -> np.ndarray:
+    """Relative covariance cov(C_b, C_b') / (C_b C_b') of the binned PSD of scan ``p`` (``n``: its
+    effective modes per bin, :func:`mode_factor` counted): 1/n on the diagonal; between the bins
+    of a Hann-windowed map, 2 S_bb' / (m_b m_b') from the window's correlation of their modes
+    (:func:`roughcontact.physics.modes.window_pair_sums_area`; 0 for bins beyond its exactly
+    summed region, and for line scans and unwindowed maps, whose bins are independent)."""
+    with np.errstate(divide="ignore"):
+        K = np.diag(np.where(n > 0, 1.0 / np.where(n > 0, n, 1.0), 0.0))
+    if p["window"] != "hann" or p["analysis"] != "area":
+        return K
+    h, sizes = p["h"], p["sizes"]
+    S, m, exact, _ = window_pair_sums_area(*h.shape, *sizes, edges, p["q_max"], hann_window_radial(*h.shape, *sizes))
+    ok = exact & (m > 0) & (n > 0)
+    pair = ok[:, None] & ok[None, :] & ~np.eye(ok.size, dtype=bool)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        K[pair] = (2.0 * S / np.outer(m, m))[pair]
+    if model is not None and model[0] is not None:  # the lowest bins exactly, for the model spectrum
+        args = {k: v for k, v in model[1].items() if k not in ("edges", "q_max")}
+        exact, inside = processed_bin_covariance_area(model[0], edges=edges, q_max=p["q_max"], **args)
+        K[np.ix_(inside, inside)] = exact[np.ix_(inside, inside)]
+    return K
+
+
+def merged_correlation(spectra: list[dict]) -> np.ndarray:
+    """Correlation matrix of the merged PSD's bins (:func:`merged_psd`; each scan's ``K`` from
+    :func:`bin_covariance`): the merge averages the scans with weights w = n / sum n, so the merged
+    relative covariance is sum over scans of w_b w_b' K_bb'. Scans are independent; NaN where a
+    bin has no modes."""
+    n = np.stack([s["n"] for s in spectra])
+    with np.errstate(invalid="ignore", divide="ignore"):
+        w = np.where(n > 0, n / n.sum(axis=0), 0.0)
+        K = sum(np.outer(wf, wf) * s["K"] for wf, s in zip(w, spectra, strict=True))
+        d = np.sqrt(np.diag(K))
+        return K / np.outer(d, d)
 
 
 def unbias_processing(p: dict, edges: np.ndarray, s: dict) -> dict:
@@ -117,8 +151,9 @@ def unbias_processing(p: dict, edges: np.ndarray, s: dict) -> dict:
                 window=hann_window_radial(*h.shape, sx, sy) if p["window"] == "hann" else None,
                 basis=detrend_basis(h.shape, DETREND_DEGREE[p["detrend"]]), periodic=p["periodic"])
     out = dict(s)
-    r1 = processing_bias_area(s["q"], s["C11"], s["n"], **args)
+    r1, model = processing_bias_area(s["q"], s["C11"], s["n"], **args, model=True)
     out["C11"] = s["C11"] / r1
+    out["model"] = (model, args)  # for bin_covariance: the spectrum's model and the map's processing
     if "C22" in s:
         r2 = processing_bias_area(s["q"], s["C22"], s["n"], **args)
         out["C22"], out["C12"] = s["C22"] / r2, s["C12"] / np.sqrt(r1 * r2)
@@ -157,8 +192,12 @@ def psd_error_grid(ds: xr.Dataset, name: str, q_grid: np.ndarray, how: str) -> n
 def drawn_psd(draw: xr.DataArray, ds: xr.Dataset, name: str, q_grid: np.ndarray, how: str, seed: int) -> xr.DataArray:
     """The measured PSD of ``name`` drawn within its band, on the grid: dims (draw, q)."""
     q, C, err = measured_bins(ds, name)
+    corr = ds.get(f"psd_{name}_measured_correlation")
+    if corr is not None:  # the window's correlation between the bins (bin_covariance), on the same bins
+        index = measured_bin_index(ds, name)
+        corr = np.nan_to_num(corr.values[np.ix_(index, index)])
     kwargs = dict(q_grid=q_grid, q=q, C=C, modes=_modes(C, err), how="zero" if how == "none" else how,
-                  seed=seed, stream=STREAMS[name])
+                  seed=seed, stream=STREAMS[name], correlation=corr)
     return xr.apply_ufunc(psd_draws_on_grid, draw, kwargs=kwargs, output_core_dims=[["q"]], dask="parallelized",
                           output_dtypes=[float], dask_gufunc_kwargs={"output_sizes": {"q": q_grid.size}})
 

@@ -16,8 +16,9 @@ cutoff of a 40 nm tip. Two layouts:
 
 The chain is the stages' own code without the engine's files: ``process_map`` (detrend,
 window, reliability cutoff), the topography stage's binned spectra (the detrending's and the
-window's bias removed, the window's mode factor across neighbouring bins), ``merged_psd``,
-``measured_psd_on_grid`` / ``drawn_psd`` on the psd stage's grid (the
+window's bias removed, the window's mode factor within bins and its correlation between bins),
+``merged_psd`` / ``merged_correlation``, ``measured_psd_on_grid`` / ``drawn_psd`` (the bins'
+correlation drawn by a Gaussian copula; ``--independent``: bins independent) on the psd stage's grid (the
 bins' mean wavenumbers as knots), then A/A0 = erf(p / 2 sqrt(G)) at the top magnification at two
 pressures (p/E* = 1e-3 and 1e-2) and the mean separation u (eq 57, alpha 0.45) at p/E* = 1e-3.
 The truth is the same prediction from the true PSD on the same q grid. A band covers when its
@@ -45,7 +46,7 @@ from roughcontact.physics.quadrature import log_grid
 from roughcontact.physics.separation import mean_separation, separation_nodes
 from roughcontact.scenes.data.synthetic import self_affine, synthesize, wavevectors
 from roughcontact.stages.shared.maps import measured_psd_on_grid, process_map
-from roughcontact.stages.shared.measured import drawn_psd, merged_psd
+from roughcontact.stages.shared.measured import drawn_psd, merged_correlation, merged_psd
 from roughcontact.stages.topography import _spectra
 
 Q0, HRMS, E_STAR, ALPHA, BPD, PPD = 2 * np.pi / 20e-6, 0.4e-6, 1.0, 0.45, 20, 50
@@ -54,6 +55,7 @@ LAYOUTS = {  # name: (H, points, ((side, crop factor, instrument spec), ...))
     "B": (0.5, 64, ((40e-6, 4, {"resolution": 1.5e-6}), (5e-6, 4, {"tip_radius": 40e-9}))),
 }
 P_AREA, P_SEP = np.array([1e-3, 1e-2]), 1e-3  # p / E*
+INDEPENDENT = False  # --independent: the bins drawn independently (the window's correlation between bins left out)
 
 
 def _maps(layout, rng, periodic=False):
@@ -85,6 +87,8 @@ def _topography(prepared):
     keep = n > 0
     ds = xr.Dataset({"psd_substrate_measured": ("q_bin", C[keep]), "psd_substrate_measured_error": ("q_bin", err[keep]),
                      "q_substrate_measured": ("q_bin", q[keep]), "modes_substrate": ("q_bin", n[keep])})
+    if not INDEPENDENT:
+        ds["psd_substrate_measured_correlation"] = (("q_bin", "q_bin_pair"), merged_correlation(spectra)[keep][:, keep])
     ds.attrs["bins_per_decade"] = BPD
     return ds, [s["n"] for s in spectra]
 
@@ -125,7 +129,11 @@ def main():
     parser.add_argument("--layouts", default="AB")
     parser.add_argument("--periodic", action="store_true",
                         help="periodic maps of the surface, no window (only the statistical error; no window bias)")
+    parser.add_argument("--independent", action="store_true",
+                        help="draw the bins independently (without the correlation between bins the window gives)")
     args = parser.parse_args()
+    global INDEPENDENT
+    INDEPENDENT = args.independent
     names = ["A/A0 at p/E* = 1e-3", "A/A0 at p/E* = 1e-2", "u at p/E* = 1e-3"]
     for layout in args.layouts:
         t0 = time.perf_counter()
