@@ -377,7 +377,8 @@ def _run(scene, outdir, targets, force, report, compute_with, verify=None, check
             ds = _computed(p, scenes[p.variant], upstream, files[i - 1], shape, report)
             reuse.retire(p.path, outdir)  # the result it replaces stays reusable under its key
             store.write(ds, p.path, compute_with=compute_with, progress=report,
-                        compress=scenes[p.variant].get("run.compress"), keep_blocks=shape.keep_blocks)
+                        compress=scenes[p.variant].get("run.compress"), keep_blocks=shape.keep_blocks,
+                        costlier_with=shape.costlier_with)
         report.finish()
         results[p.variant].add(p.stage.name, p.path)
         report(f"{tag}: computed in {time.perf_counter() - t0:.2f} s ({why}) -> {p.path}")

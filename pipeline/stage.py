@@ -272,6 +272,11 @@ class Shape:
     #: folder, under the result's content key, until the result is written, so that a run that is
     #: killed resumes where it stopped (docs/reliability.md)
     keep_blocks: bool = False
+    #: sweep dimensions along which a block's work grows with the coordinate's value (e.g. a BEM
+    #: map's pixels per wavelength): the engine computes the blocks with the largest product of
+    #: these values first, so that on several workers the long ones do not come last and leave the
+    #: others idle (longest first); the result is the same in any order
+    costlier_with: tuple[str, ...] = ()
 
     @classmethod
     def of(cls, ds: xr.Dataset, small: int = 10**6, values_up_to: int = 10**4) -> "Shape":

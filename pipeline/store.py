@@ -165,7 +165,7 @@ def _forget_blocks(path: Path, keep: Path | None = None) -> None:
 
 
 def write(ds: xr.Dataset, path: Path, compute_with="threads", progress=None, compress: bool = True,
-          keep_blocks: bool = False) -> None:
+          keep_blocks: bool = False, costlier_with: tuple[str, ...] = ()) -> None:
     """Write ``ds`` to ``path`` atomically: a temporary file in the same folder, then a rename.
 
     Dask-backed variables are computed block by block by ``compute_with`` (a dask scheduler
@@ -182,7 +182,8 @@ def write(ds: xr.Dataset, path: Path, compute_with="threads", progress=None, com
     finished block is also kept in :func:`kept_blocks_folder` (named by the result's content key)
     until the result is in place: a run that is killed or fails resumes from them, computing only
     the blocks not kept. Kept blocks of the same result under another key (an older scene) are
-    removed when it is written.
+    removed when it is written. ``costlier_with``: the dimensions along which a block's work grows
+    with the coordinate (``Shape.costlier_with``): those blocks are computed first.
     """
     from .writing import KeptBlocks, dask_variables, write_blocks
 
@@ -205,7 +206,8 @@ def write(ds: xr.Dataset, path: Path, compute_with="threads", progress=None, com
             _write_in_memory(eager, tmp, cf.encoding(eager, compress))
         sums = integrity.Checksums({name: ds[name].variable.chunks for name in lazy})
         if lazy:
-            write_blocks(tmp, ds, lazy, compute_with, progress, checksums=sums, keep=keep, compress=compress)
+            write_blocks(tmp, ds, lazy, compute_with, progress, checksums=sums, keep=keep, compress=compress,
+                         costlier_with=costlier_with)
         integrity.stamp(tmp, sums.known())
         with open(tmp, "rb+") as fh:
             os.fsync(fh.fileno())

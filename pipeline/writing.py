@@ -234,6 +234,27 @@ def _groups(ds: xr.Dataset, names: list[str], keep: KeptBlocks | None) -> list[_
     return out
 
 
+def costliest_first(ds: xr.Dataset, group: _Group, costlier_with: tuple[str, ...]) -> list[tuple]:
+    """The group's block indices, those whose work is largest first: work taken as the product,
+    over the dimensions ``costlier_with`` the group spans, of the largest |coordinate| in the block
+    (a NaN or a dimension without coordinate counts 1); ties keep their order (a stable sort)."""
+    along = [(axis, np.abs(np.asarray(ds[dim].values, dtype=float)))
+             for axis, dim in enumerate(group.dims) if dim in costlier_with and dim in ds.coords]
+    if not along:
+        return group.indices
+
+    def work(idx) -> float:
+        region = group.region(idx)
+        product = 1.0
+        for axis, values in along:
+            block = values[region[axis]]
+            largest = np.nanmax(block) if np.isfinite(block).any() else 1.0
+            product *= largest
+        return product
+
+    return sorted(group.indices, key=work, reverse=True)
+
+
 def _candidate(var: xr.Variable, compress: bool) -> bool:
     """Whether the variable would be compressed (cf.lazy_variable) if compression pays."""
     return bool(compress and var.ndim and var.nbytes >= cf.COMPRESS_BYTES and var.dtype.kind in "fiu")
@@ -340,7 +361,8 @@ def _target(path, ds: xr.Dataset, group: _Group, compress: dict[str, tuple | Non
 
 
 def write_blocks(path, ds: xr.Dataset, names: list[str], compute_with, progress=None, in_flight: int | None = None,
-                 checksums=None, keep: KeptBlocks | None = None, compress: bool = True) -> None:
+                 checksums=None, keep: KeptBlocks | None = None, compress: bool = True,
+                 costlier_with: tuple[str, ...] = ()) -> None:
     """Define the dask variables ``names`` of ``ds`` in the existing NetCDF file ``path`` (whose
     other variables are already written), compute them block by block on ``compute_with`` (what
     :func:`roughcontact.scheduling.scheduler` yields) and write them; ``progress`` (a
@@ -354,8 +376,14 @@ def write_blocks(path, ds: xr.Dataset, names: list[str], compute_with, progress=
     With ``keep`` (:class:`KeptBlocks`), the blocks it holds are written without computing them,
     and every other block is computed on its own and kept as soon as it finishes (then written),
     so that a run killed at any moment loses at most the blocks being computed.
+
+    ``costlier_with``: dimensions along which a block's work grows with the coordinate's value;
+    the blocks are computed in decreasing order of the product of those values (longest first:
+    :func:`costliest_first`), which changes no value written.
     """
     groups = _groups(ds, names, keep)
+    for group in groups:
+        group.indices = costliest_first(ds, group, costlier_with)
     total = sum(len(g.indices) for g in groups)
     done_before = sum(len(g.kept) for g in groups)
     if progress is not None and done_before:

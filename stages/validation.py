@@ -147,7 +147,9 @@ def describe_validation_bem(inp: StageInput) -> Shape:
     solved = grids[grids <= inp["validation.max_grid"]]
     largest = int(solved.max()) if solved.size else int(inp["validation.max_grid"])
     return Shape(work={"values_per_pixel": 25, "pixels": largest ** 2, "per_load": 1 / loads},
-                 keys={"pixels": "validation.max_grid"}, coupled=("reduced_pressure",), keep_blocks=True)
+                 keys={"pixels": "validation.max_grid"}, coupled=("reduced_pressure",), keep_blocks=True,
+                 # a task's map has bandwidth x pixels_per_wavelength pixels a side: the largest first
+                 costlier_with=("bandwidth", "pixels_per_wavelength"))
 
 
 TASK_COORDS = {

@@ -121,3 +121,33 @@ def test_a_failing_block_leaves_nothing(tmp_path, route):
     with pytest.raises(ValueError, match="kernel failed"):
         store.write(ds, tmp_path / "result.nc")
     assert list(tmp_path.iterdir()) == []
+
+
+def test_costliest_blocks_are_computed_first_and_write_the_same_values(tmp_path, monkeypatch):
+    """Longest-first ordering (``Shape.costlier_with``): the blocks reach the scheduler in
+    decreasing order of the product of their coordinates along those dimensions (a NaN coordinate
+    counts 1, ties keep their order), and the file holds the same values as in the natural order."""
+    ds = _dataset(chunks=(50, 6))  # p: 4 blocks, eta: 4 blocks
+    group = writing._groups(ds, ["area"], None)[0]
+    order = writing.costliest_first(ds, group, ("p",))
+    largest_p = [np.abs(ds["p"].values[group.region(idx)[0]]).max() for idx in order]
+    assert largest_p == sorted(largest_p, reverse=True) and sorted(order) == sorted(group.indices)
+    assert [idx[0] for idx in order[:4]] == [3, 3, 3, 3] and [idx[1] for idx in order[:4]] == [0, 1, 2, 3]
+    both = writing.costliest_first(ds, group, ("p", "eta"))
+    work = [np.abs(ds["p"].values[group.region(i)[0]]).max() * np.abs(ds["eta"].values[group.region(i)[1]]).max()
+            for i in both]
+    assert work == sorted(work, reverse=True)
+    assert writing.costliest_first(ds, group, ("not_a_dimension",)) == group.indices
+
+    seen = []
+    real = writing.computed_blocks
+
+    def recording(tasks, *args, **kwargs):
+        tasks = list(tasks)
+        seen.extend(idx for idx, _ in tasks)
+        return real(iter(tasks), *args, **kwargs)
+
+    monkeypatch.setattr(writing, "computed_blocks", recording)
+    back = _roundtrip(tmp_path, ds, costlier_with=("p",))
+    assert seen[:4] == order[:4]
+    assert np.array_equal(back["area"].values, ds["area"].values, equal_nan=True)
