@@ -46,8 +46,9 @@ class Var:
     """An output variable (or coordinate) of a stage: its units and long name, written here only.
 
     ``optional`` variables are produced only when the scene asks for them by name;
-    ``standard_name`` is the CF standard name where CF has one; ``attrs`` are further fixed
-    attributes (e.g. a ``comment``) stamped with the units. A ``tolerance`` makes the variable
+    ``standard_name`` is the CF standard name where CF has one; ``comment`` the CF comment (what
+    the value is, its equation, where it is NaN); ``attrs`` are further fixed attributes, all
+    stamped with the units. A ``tolerance`` makes the variable
     one that ``roughcontact accuracy`` measures: the error (relative to the variable's scale,
     docs/accuracy.md) the default preset must reach.
     """
@@ -58,10 +59,13 @@ class Var:
     standard_name: str | None = None
     attrs: Mapping[str, str] = field(default_factory=dict)
     tolerance: float | None = field(default=None, compare=False)
+    comment: str | None = None
 
     def stamp(self) -> dict[str, str]:
         """The attributes the engine writes on the variable (the tolerance is the accuracy's)."""
         out = {"units": self.units, "long_name": self.long_name, **self.attrs}
+        if self.comment:
+            out["comment"] = self.comment
         if self.standard_name:
             out["standard_name"] = self.standard_name
         return out

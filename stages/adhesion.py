@@ -314,35 +314,35 @@ STAGE = register(
                 "numerics.adhesion_zeta_offset", "numerics.adhesion_K_min", "numerics.adhesion_tolerance"),
         outputs={
             "gamma_eff_macroscopic": Var("J/m^2", "effective interfacial energy gamma_eff(1)",
-                                         attrs={"comment": "at the lowest magnification, partial-contact theory, at "
-                                                           "the nominal stress sigma0; eqs 9, 13"}),
+                                         comment="at the lowest magnification, partial-contact theory, at "
+                                                 "the nominal stress sigma0; eqs 9, 13"),
             "gamma_eff_full_contact": Var("J/m^2", "effective interfacial energy, full contact",
-                                          attrs={"comment": "full-contact theory: Delta_gamma [F - (2 pi/delta) int "
-                                                            "q^2 C dq]; eq 13 with P = S = 1"}),
+                                          comment="full-contact theory: Delta_gamma [F - (2 pi/delta) int "
+                                                  "q^2 C dq]; eq 13 with P = S = 1"),
             "adhesive_contact_area_ratio": Var("1", "relative contact area A/A0 with adhesion",
-                                               attrs={"comment": "P(zeta1), at the highest magnification, at the "
-                                                                 "nominal stress sigma0 (zero load by default)"}),
+                                               comment="P(zeta1), at the highest magnification, at the "
+                                                       "nominal stress sigma0 (zero load by default)"),
             "adhesive_area_ratio_zeta": Var("1", "contact area P(zeta) with adhesion",
-                                            attrs={"comment": "relative apparent contact area P(zeta) = A(zeta)/A0 "
-                                                              "at the nominal stress sigma0; eqs 8-9"}),
+                                            comment="relative apparent contact area P(zeta) = A(zeta)/A0 "
+                                                    "at the nominal stress sigma0; eqs 8-9"),
             "gamma_eff": Var("J/m^2", "effective interfacial energy gamma_eff(zeta)",
-                             attrs={"comment": "partial contact; eq 13 corrected; NaN where P = 0"}),
+                             comment="partial contact; eq 13 corrected; NaN where P = 0"),
             "detachment_stress": Var("Pa", "detachment stress sigma_a(zeta)",
-                                     attrs={"comment": "sigma_a = (gamma_eff E* zeta qL)^(1/2), eq 6; 0 where "
-                                                       "gamma_eff <= 0"}),
+                                     comment="sigma_a = (gamma_eff E* zeta qL)^(1/2), eq 6; 0 where "
+                                             "gamma_eff <= 0"),
             "surface_area_factor": Var("1", "surface-area factor F",
-                                       attrs={"comment": "F = 1 + (sqrt(pi) xi/2) erfcx(1/xi), eq 11"}),
+                                       comment="F = 1 + (sqrt(pi) xi/2) erfcx(1/xi), eq 11"),
             "delta_gamma": Var("J/m^2", "interfacial binding energy Delta_gamma",
-                               attrs={"comment": "of flat surfaces"}),
+                               comment="of flat surfaces"),
             "adhesion_length": Var("m", "adhesion length delta",
-                                   attrs={"comment": "delta = 4 Delta_gamma / E*, eq 14"}),
+                                   comment="delta = 4 Delta_gamma / E*, eq 14"),
             "hrms_substrate_vanishing": Var("m", "substrate rms roughness for vanishing adhesion",
-                                            attrs={"comment": "the substrate rms roughness at which adhesion "
-                                                              "vanishes: gamma_eff(1) and A/A0 reach 0 together; root "
-                                                              "along the attached branch, zero load"},
+                                            comment="the substrate rms roughness at which adhesion "
+                                                    "vanishes: gamma_eff(1) and A/A0 reach 0 together; root "
+                                                    "along the attached branch, zero load",
                                             tolerance=1e-3),
         },
-        coords={"model": Var("1", "elastic-energy factor model S_el", attrs={"comment": "eq 10"})},
+        coords={"model": Var("1", "elastic-energy factor model S_el", comment="eq 10")},
         figures=(
             Figure("fig1_adhesion_one_surface", "gamma_eff and A/A0 at zero load, one rough surface (seed Fig. 1)",
                    ("adhesion",), figure_one_surface),

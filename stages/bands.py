@@ -53,11 +53,11 @@ def _band_var(st: Stage, var: str) -> Var:
     """The band of ``var`` of stage ``st``: a short label, and in the comment what it is a band of (the
     source's label and comment)."""
     source = st.outputs[var]
-    about = "; ".join(filter(None, (source.long_name, source.attrs.get("comment"))))
+    about = "; ".join(filter(None, (source.long_name, source.stamp().get("comment"))))
     comment = (f"quantiles over the dimension draw (standard_name realization) of the draws 1..N of {st.name}.{var} "
                f"({about}); {_COMMENT}")
     return Var(source.units, _LABELS.get(var, f"{source.long_name} (band)"),
-               optional=f"{var}_band" not in ALWAYS, attrs={"comment": comment})
+               optional=f"{var}_band" not in ALWAYS, comment=comment)
 
 
 def _needs() -> tuple:
@@ -134,7 +134,7 @@ register(
         reads=("bands.draws", "bands.level"),
         outputs={name: _band_var(st, var) for name, (st, var) in SOURCE.items()},
         coords={"quantile": Var("1", "probability level of the quantile",
-                                attrs={"comment": "quantile over the spectrum draws"}),
+                                comment="quantile over the spectrum draws"),
                 **CONTACT.coords, **ADHESION.coords},
         figures=(
             Figure("bands_psd", "Combined PSD with its uncertainty band", ("bands",), figure_band_psd),

@@ -271,48 +271,48 @@ register(
         files=(topography_files("substrate"), topography_files("solid")),
         outputs={
             "bem_contact_area_ratio": Var("1", "relative contact area A/A0, BEM",
-                                          attrs={"comment": "fraction of pixels in contact, per realization"}),
+                                          comment="fraction of pixels in contact, per realization"),
             "bem_mean_gap": Var("m", "mean interfacial separation u, BEM",
-                                attrs={"comment": "map average of the gap, per realization"}),
+                                comment="map average of the gap, per realization"),
             "bem_stress_histogram": Var("1/Pa", "contact pressure density P(sigma), BEM",
-                                        attrs={"comment": "BEM density of the local contact pressure (integrates to "
-                                                          "A/A0 within the bins)"}),
+                                        comment="BEM density of the local contact pressure (integrates to "
+                                                "A/A0 within the bins)"),
             "bem_stress_overflow": Var("1", "contact area beyond the last bin, BEM",
-                                       attrs={"comment": "fraction of the map in contact at pressures beyond the "
-                                                         "last histogram bin"}),
+                                       comment="fraction of the map in contact at pressures beyond the "
+                                               "last histogram bin"),
             "bem_hrms_combined": Var("m", "rms height of h1 - h2 in the BEM band",
-                                     attrs={"comment": "of the composite h1 - h2, synthesized or measured (attribute "
-                                                       "bem_surfaces)"}),
+                                     comment="of the composite h1 - h2, synthesized or measured (attribute "
+                                             "bem_surfaces)"),
             "bem_rms_slope_combined": Var("1", "rms slope of h1 - h2 in the BEM band",
-                                          attrs={"comment": "of the composite h1 - h2, synthesized or measured "
-                                                            "(attribute bem_surfaces)"}),
+                                          comment="of the composite h1 - h2, synthesized or measured "
+                                                  "(attribute bem_surfaces)"),
             "bem_contact_area_ratio_mean": Var("1", "BEM relative contact area, mean over realizations"),
             "bem_contact_area_ratio_std": Var("1", "BEM relative contact area, std over realizations",
-                                              attrs={"comment": "standard deviation over realizations; 0 for a single "
-                                                                "realization"}),
+                                              comment="standard deviation over realizations; 0 for a single "
+                                                      "realization"),
             "bem_mean_gap_mean": Var("m", "BEM mean separation, mean over realizations"),
             "bem_mean_gap_std": Var("m", "BEM mean separation, std over realizations",
-                                    attrs={"comment": "standard deviation over realizations; 0 for a single "
-                                                      "realization"}),
+                                    comment="standard deviation over realizations; 0 for a single "
+                                            "realization"),
             "theory_contact_area_ratio": Var("1", "relative contact area A/A0, theory",
-                                             attrs={"comment": "A/A0 of the contact stage (eq 19, or "
-                                                               f"contact.correction) {_THEORY}"}),
+                                             comment="A/A0 of the contact stage (eq 19, or "
+                                                     f"contact.correction) {_THEORY}"),
             "theory_mean_separation": Var("m", "mean interfacial separation u, theory",
-                                          attrs={"comment": "mean separation of the separation stage (eq 57, with "
-                                                            f"separation.refinement) {_THEORY}"}),
+                                          comment="mean separation of the separation stage (eq 57, with "
+                                                  f"separation.refinement) {_THEORY}"),
             "theory_variant_contact_area_ratio": Var("1", "A/A0 of each theory variant",
-                                                     attrs={"comment": f"coordinate theory; {_THEORY}"}),
+                                                     comment=f"coordinate theory; {_THEORY}"),
             "theory_variant_mean_separation": Var("m", "mean separation of each theory variant",
-                                                  attrs={"comment": _THEORY}),
+                                                  comment=_THEORY),
             "area_ratio_variant_to_bem": Var("1", "A/A0 ratio theory / BEM, per variant"),
             "separation_ratio_variant_to_bem": Var("1", "mean separation ratio theory / BEM, per variant"),
             "area_ratio_theory_to_bem": Var("1", "A/A0 ratio theory / BEM",
-                                            attrs={"comment": "relative contact area, theory and BEM on the same "
-                                                              "band"}),
+                                            comment="relative contact area, theory and BEM on the same "
+                                                    "band"),
             "separation_ratio_theory_to_bem": Var("1", "mean separation ratio theory / BEM",
-                                                  attrs={"comment": "theory and BEM on the same band; NaN where both "
-                                                                    "are 0"}),
-            **{k: Var(_BAND_UNITS[k], label, attrs={"comment": comment} if comment else {})
+                                                  comment="theory and BEM on the same band; NaN where both "
+                                                          "are 0"),
+            **{k: Var(_BAND_UNITS[k], label, comment=comment)
                for k, (label, comment) in _BAND_NAMES.items()},
             "E_star": E_STAR,
             **PLASTIC_VARS,
@@ -322,9 +322,9 @@ register(
             "realization": REALIZATION,
             "theory": THEORY,
             "bem_stress_level": Var("1", "histogram bin centre sigma/sigma_max",
-                                    attrs={"comment": "sigma / sigma_max, sigma_max = p + sigma_width sqrt(G)"}),
+                                    comment="sigma / sigma_max, sigma_max = p + sigma_width sqrt(G)"),
             "bem_sigma": Var("Pa", "contact pressure at the bin centre",
-                             attrs={"comment": "local contact pressure at each histogram bin centre"}),
+                             comment="local contact pressure at each histogram bin centre"),
         },
         figures=(Figure("bem_comparison", "theory vs BEM: A/A0, mean separation and their ratios",
                         ("bem",), figure_bem_comparison),

@@ -99,13 +99,13 @@ register(
         reads=(*MATERIAL_KEYS, *COATING_KEYS, "load.p", *KEYS),
         outputs={
             "thermal_contact_conductance": Var("W/(m^2*K)", "thermal contact conductance h",
-                                               attrs={"comment": "per unit nominal area, h = 2 K / (E* (1/kappa1 + "
-                                                                 f"1/kappa2)); {ASSUMPTIONS}"}),
+                                               comment="per unit nominal area, h = 2 K / (E* (1/kappa1 + "
+                                                       f"1/kappa2)); {ASSUMPTIONS}"),
             "thermal_contact_resistance": Var("m^2*K/W", "thermal contact resistance 1/h",
-                                              attrs={"comment": "times the nominal area"}),
+                                              comment="times the nominal area"),
             "electrical_contact_conductance": Var("S/m^2", "electrical contact conductance",
-                                                  attrs={"comment": "per unit nominal area, 2 K / (E* (rho1 + rho2)); "
-                                                                    f"{ASSUMPTIONS}"}),
+                                                  comment="per unit nominal area, 2 K / (E* (rho1 + rho2)); "
+                                                          f"{ASSUMPTIONS}"),
             "electrical_contact_resistance": Var("ohm*m^2", "electrical contact resistance times nominal area"),
         },
         figures=(Figure("conductance", "thermal and electrical contact conductance against p", ("conductance",),

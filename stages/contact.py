@@ -157,36 +157,36 @@ STAGE = register(
                 *CORRECTION_KEYS, "contact.yield_stress"),
         outputs={
             "G": Var("Pa^2", "Persson's G(zeta)",
-                     attrs={"comment": "G = (pi/4) E*^2 int_qL^(zeta qL) q^3 C dq (eq 17)"}),
+                     comment="G = (pi/4) E*^2 int_qL^(zeta qL) q^3 C dq (eq 17)"),
             "contact_area_ratio": Var("1", "relative contact area A/A0", tolerance=1e-4,
-                                      attrs={"comment": "A/A0 = erf(p / 2 sqrt G) (eq 19); with contact.correction, "
-                                                        "G -> G_eff (attribute 'correction')"}),
+                                      comment="A/A0 = erf(p / 2 sqrt G) (eq 19); with contact.correction, "
+                                              "G -> G_eff (attribute 'correction')"),
             "E_star": E_STAR,
             "qL": Q_REFERENCE,
             "stress_distribution": Var("1/Pa", "stress distribution P(sigma)", optional=True,
-                                       attrs={"comment": "P(sigma; p, zeta) of eq 16, on the stress grid sigma"}),
+                                       comment="P(sigma; p, zeta) of eq 16, on the stress grid sigma"),
             "stress_distribution_mass": Var(
                 "1", "integral of P(sigma) over the stress grid", optional=True,
-                attrs={"comment": "trapezoidal rule over the stored stress grid; stored with stress_distribution; "
-                                  "equals contact_area_ratio within 1e-3 (relative) "
-                                  "at numerics.sigma_points >= 401 and sigma_width >= 8 (the defaults); a coarser grid "
-                                  "shows here how much of the distribution it misses"}),
+                comment="trapezoidal rule over the stored stress grid; stored with stress_distribution; "
+                        "equals contact_area_ratio within 1e-3 (relative) "
+                        "at numerics.sigma_points >= 401 and sigma_width >= 8 (the defaults); a coarser grid "
+                        "shows here how much of the distribution it misses"),
             "elastic_contact_area_ratio": Var(
                 "1", "elastic contact area A_el/A0", optional=True,
-                attrs={"comment": "Persson's theory with absorbing walls at sigma = 0 and sigma = contact.yield_stress "
-                                  "(docs/plasticity.md): contact spots below the penetration hardness"}),
+                comment="Persson's theory with absorbing walls at sigma = 0 and sigma = contact.yield_stress "
+                        "(docs/plasticity.md): contact spots below the penetration hardness"),
             "plastic_contact_area_ratio": Var(
                 "1", "plastic contact area A_pl/A0", optional=True,
-                attrs={"comment": "contact spots at the penetration hardness (the flux through sigma = "
-                                  "contact.yield_stress accumulated over zeta); elastic load + yield_stress "
-                                  "A_pl/A0 = p (docs/plasticity.md)"}),
+                comment="contact spots at the penetration hardness (the flux through sigma = "
+                        "contact.yield_stress accumulated over zeta); elastic load + yield_stress "
+                        "A_pl/A0 = p (docs/plasticity.md)"),
         },
         coords={
             "sigma": Var("Pa", "local normal stress sigma",
-                         attrs={"comment": "the stress at each node of the stress grid of every point"}),
+                         comment="the stress at each node of the stress grid of every point"),
             "stress_level": Var("1", "node of the stress grid",
-                                attrs={"comment": "sigma = lo + stress_level (hi - lo), lo = max(0, p - sigma_width "
-                                                  "sqrt(G)), hi = p + sigma_width sqrt(G) ([0, 2p] where G = 0)"}),
+                                comment="sigma = lo + stress_level (hi - lo), lo = max(0, p - sigma_width "
+                                        "sqrt(G)), hi = p + sigma_width sqrt(G) ([0, 2p] where G = 0)"),
         },
         figures=(
             Figure("fig3_contact_area", "A/A0 against p/E* (seed Fig. 3)", ("contact",), figure_contact_area),

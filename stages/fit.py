@@ -207,7 +207,7 @@ def compute_fit(inp: StageInput) -> xr.Dataset:
 
 
 def _vars(table, surface):
-    return {f"{v}_{surface}": Var(u, f"{ln} ({surface})", attrs={"comment": "over the fitted band"})
+    return {f"{v}_{surface}": Var(u, f"{ln} ({surface})", comment="over the fitted band")
             for v, u, ln, _ in table}
 
 
@@ -217,8 +217,8 @@ def _bounds(surface):
     for v, u, _, short in QUANTITIES:
         for end, word in (("low", "lower"), ("high", "upper")):
             out[f"{v}_{end}_{surface}"] = Var(u, f"{word} CI bound of the fit's {short} ({surface})",
-                                              attrs={"comment": "probability content: attribute ci_level; NaN where "
-                                                                "the quantity has no interval (q0 not resolved)"})
+                                              comment="probability content: attribute ci_level; NaN where "
+                                                      "the quantity has no interval (q0 not resolved)")
     return out
 
 
@@ -243,7 +243,7 @@ STAGE = register(
             **{f"psd_fit_data_error_{s}": Var("m^4", f"standard error of the fitted bins ({s})") for s in SURFACES},
             **{f"psd_fit_{s}": Var("m^4", f"fitted self-affine PSD at the bins ({s})") for s in SURFACES},
             **{f"fit_residual_{s}": Var("1", f"weighted residual in log C ({s})",
-                                        attrs={"comment": "(y - model) / sigma per bin"}) for s in SURFACES},
+                                        comment="(y - model) / sigma per bin") for s in SURFACES},
         },
         coords={f"q_fit_{s}": Var("1/m", f"wavenumber of the fitted bins ({s})") for s in SURFACES},
         figures=(Figure("selfaffine_fit", "Self-affine fits of the measured spectra", ("fit",), figure_fit),),

@@ -76,12 +76,12 @@ SHEAR_PARAMS = (
 SHEAR_KEYS = tuple(f"friction.{p.name}" for p in SHEAR_PARAMS)
 SHEAR_OUTPUTS = {
     "friction_coefficient_viscoelastic": Var("1", "viscoelastic (hysteretic) friction term", optional=True,
-                                             attrs={"comment": "eq 61; with friction.shear it is the first of the "
-                                                               "two terms of friction_coefficient"}),
+                                             comment="eq 61; with friction.shear it is the first of the "
+                                                     "two terms of friction_coefficient"),
     "friction_coefficient_contact": Var("1", "contact shear term tau_f A/A0 / sigma0", optional=True),
     "contact_shear_stress": Var("Pa", "frictional shear stress tau_f of the contacts", optional=True,
-                                attrs={"comment": "tau_f(v a_T(T_c)), T_c the contacts' temperature (the flash "
-                                                  "temperature with friction.flash, else modulus.T)"}),
+                                comment="tau_f(v a_T(T_c)), T_c the contacts' temperature (the flash "
+                                        "temperature with friction.flash, else modulus.T)"),
 }
 
 
@@ -273,12 +273,12 @@ STAGE = register(
               + COATING_KEYS,
         outputs={
             "friction_coefficient": Var("1", "friction coefficient mu", tolerance=1e-4,
-                                        attrs={"comment": "eq 61, plus the contact shear term with friction.shear"}),
+                                        comment="eq 61, plus the contact shear term with friction.shear"),
             "sliding_contact_area_ratio": Var("1", "relative contact area A/A0, sliding", tolerance=1e-4,
-                                              attrs={"comment": "A/A0 = P(q1) while sliding; eqs 31, 62"}),
+                                              comment="A/A0 = P(q1) while sliding; eqs 31, 62"),
             "sliding_G": Var("1", "G(q, v) while sliding", optional=True,
-                             attrs={"comment": "G(q; v) of eq 62 (corrected: |E|^2, upper limit q), sigma0^2 "
-                                               "absorbed"}),
+                             comment="G(q; v) of eq 62 (corrected: |E|^2, upper limit q), sigma0^2 "
+                                     "absorbed"),
             "friction_density": Var("1", "contribution to mu per unit ln q, d mu / d ln q", optional=True),
             **FLASH_OUTPUTS,
             **SHEAR_OUTPUTS,

@@ -158,20 +158,20 @@ register(
                                                      "comment": "leak rate of the seal (Lorenz & Persson 2010); "
                                                                 + GAP_DISTRIBUTION}),
             "flow_factor_critical_junction": Var("m^3", "flow factor u1^3 of the critical junction",
-                                                 attrs={"comment": "effective flow factor"}),
+                                                 comment="effective flow factor"),
             "flow_factor_effective_medium": Var("m^3", "Bruggeman's 2D effective flow factor sigma"),
             "critical_magnification": Var("1", "critical magnification zeta_c",
-                                          attrs={"comment": "magnification at which the non-contact area "
-                                                            "percolates, A(zeta_c)/A0 = leakage.percolation_area"}),
+                                          comment="magnification at which the non-contact area "
+                                                  "percolates, A(zeta_c)/A0 = leakage.percolation_area"),
             "critical_gap": Var("m", "critical gap u1(zeta_c)",
-                                attrs={"comment": "separation of the critical constriction"}),
+                                comment="separation of the critical constriction"),
             "sealing_pressure_critical_junction": Var("Pa", "sealing pressure, critical-junction theory",
-                                                      attrs={"comment": "nominal pressure above which the "
-                                                                        "critical-junction theory has no open path "
-                                                                        "(A(q_max)/A0 = percolation_area)"}),
+                                                      comment="nominal pressure above which the "
+                                                              "critical-junction theory has no open path "
+                                                              "(A(q_max)/A0 = percolation_area)"),
             "sealing_pressure_effective_medium": Var("Pa", "sealing pressure, effective-medium theory",
-                                                     attrs={"comment": "nominal pressure above which Bruggeman's "
-                                                                       "medium does not conduct (A(q_max)/A0 = 1/2)"}),
+                                                     comment="nominal pressure above which Bruggeman's "
+                                                             "medium does not conduct (A(q_max)/A0 = 1/2)"),
         },
         figures=(Figure("leakage", "leak rate of the seal against the contact pressure", ("leakage",),
                         figure_leakage),),

@@ -311,22 +311,22 @@ STAGE = register(
         describe=describe_psd,
         outputs={
             "psd_substrate": Var("m^4", "power spectral density C1 of the substrate",
-                                 attrs={"comment": "Persson convention"}),
-            "psd_solid": Var("m^4", "power spectral density C2 of the solid", attrs={"comment": "Persson convention"}),
+                                 comment="Persson convention"),
+            "psd_solid": Var("m^4", "power spectral density C2 of the solid", comment="Persson convention"),
             "psd_combined": Var("m^4", "combined power spectral density C(q) of the pair"),
             "hrms_combined": Var("m", "rms roughness of the combined surface",
-                                 attrs={"comment": "from the combined PSD"}),
+                                 comment="from the combined PSD"),
             "rms_slope_combined": Var("1", "rms slope of the combined surface",
-                                      attrs={"comment": "from the combined PSD"}),
+                                      comment="from the combined PSD"),
             "psd_substrate_error": Var("m^4", "standard error of C1",
-                                       attrs={"comment": "statistical standard error of C1 on the grid; 0 where C1 is "
-                                                         "analytic or no errors are known"}),
+                                       comment="statistical standard error of C1 on the grid; 0 where C1 is "
+                                               "analytic or no errors are known"),
             "psd_solid_error": Var("m^4", "standard error of C2",
-                                   attrs={"comment": "statistical standard error of C2 on the grid; 0 where C2 is "
-                                                     "analytic or no errors are known"}),
+                                   comment="statistical standard error of C2 on the grid; 0 where C2 is "
+                                           "analytic or no errors are known"),
             "psd_combined_error": Var("m^4", "standard error of the combined PSD C(q)",
-                                      attrs={"comment": "linear propagation of the errors of C1, C2 and eta "
-                                                        "(measured spectra)"}),
+                                      comment="linear propagation of the errors of C1, C2 and eta "
+                                              "(measured spectra)"),
         },
         doc="C1(q), C2(q) on a log-spaced q grid and the combined C(q, eta) (eq 52).",
     )

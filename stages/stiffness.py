@@ -92,14 +92,14 @@ register(
         reads=(*MATERIAL_KEYS, *COATING_KEYS, "load.p", "contact.zeta", *SEPARATION_KEYS),
         outputs={
             "contact_stiffness": Var("Pa/m", "normal contact stiffness K = -dp/du",
-                                     attrs={"comment": f"per unit nominal area; {INFINITE}"}, tolerance=1e-4),
+                                     comment=f"per unit nominal area; {INFINITE}", tolerance=1e-4),
             "stiffness_length": Var("m", "stiffness length p/K = -du/d(ln p)",
-                                    attrs={"comment": "the decay length of the separation law at p (-> u0 at small "
-                                                      "load)"}),
+                                    comment="the decay length of the separation law at p (-> u0 at small "
+                                            "load)"),
             "small_load_stiffness": Var("Pa/m", "small-load contact stiffness p/u0",
-                                        attrs={"comment": "small-load limit of the contact stiffness, u0 of eq 59; "
-                                                          "+inf where u0 = 0: the surfaces fit exactly (combined PSD "
-                                                          "zero, e.g. identical surfaces with eta = 1)"}),
+                                        comment="small-load limit of the contact stiffness, u0 of eq 59; "
+                                                "+inf where u0 = 0: the surfaces fit exactly (combined PSD "
+                                                "zero, e.g. identical surfaces with eta = 1)"),
             "E_star": E_STAR,
         },
         figures=(Figure("stiffness", "contact stiffness K = -dp/du against p/E*, and K u0/p",

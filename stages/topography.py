@@ -276,8 +276,8 @@ register(
                                       attrs=_empty(s, f"mean wavenumber of the {s}'s Fourier modes in the bin"))
                for s in SURFACES},
             **{f"modes_{s}": Var("1", f"independent Fourier modes of the {s}",
-                                 attrs={"comment": f"independent Fourier modes of the {s} in the bin (a window's "
-                                                   "correlations counted)"}) for s in SURFACES},
+                                 comment=f"independent Fourier modes of the {s} in the bin (a window's "
+                                         "correlations counted)") for s in SURFACES},
             **{f"psd_{s}_measured_spread": Var("1", f"Birge ratio of the {s}'s files",
                                                attrs=_empty(s, f"Birge ratio sqrt(chi^2/(k-1)) of the spread between "
                                                                f"the {s}'s k files in the bin (about 1 when they "
@@ -298,7 +298,7 @@ register(
         },
         coords={"q_bin": Var("1/m", "wavenumber (geometric bin centre)"),
                 "q_bin_pair": Var("1/m", "wavenumber of the paired bin",
-                                  attrs={"comment": "the second bin of a pair of bins q_bin (same lattice)"})},
+                                  comment="the second bin of a pair of bins q_bin (same lattice)")},
         figures=(
             Figure("measured_psd", "Measured PSDs", ("topography",), figure_measured_psd),
             Figure("coherence", "Measured coherence eta(q)", ("topography",), figure_coherence),

@@ -154,13 +154,13 @@ def describe_validation_bem(inp: StageInput) -> Shape:
 
 TASK_COORDS = {
     "hurst": Var("1", "Hurst exponent H of both surfaces"),
-    "bandwidth": Var("1", "bandwidth zeta = q_max / qL", attrs={"comment": "of the case's band qL..zeta qL"}),
+    "bandwidth": Var("1", "bandwidth zeta = q_max / qL", comment="of the case's band qL..zeta qL"),
     "reduced_pressure": Var("1", "reduced pressure p / (E* g)",
-                            attrs={"comment": "g is the rms slope of the case's combined spectrum on its band"}),
+                            comment="g is the rms slope of the case's combined spectrum on its band"),
     "pixels_per_wavelength": Var("1", "BEM pixels per shortest wavelength",
-                                 attrs={"comment": "the resolution rung of the BEM task"}),
+                                 comment="the resolution rung of the BEM task"),
     "realization": Var("1", "index of the random surface pair"),
-    "grid": Var("1", "BEM pixels per side", attrs={"comment": "pixels_per_wavelength x bandwidth"}),
+    "grid": Var("1", "BEM pixels per side", comment="pixels_per_wavelength x bandwidth"),
 }
 _PER_TASK = {"comment": "one value per BEM task (hurst, bandwidth, eta, realization, pixels_per_wavelength) and "
                         "reduced pressure; NaN where the rung is beyond validation.max_grid or the contact is "
@@ -177,8 +177,8 @@ register(
         outputs={
             "validation_bem_contact_area_ratio": Var("1", "BEM relative contact area", attrs=_PER_TASK),
             "validation_bem_mean_gap": Var("m", "BEM mean interfacial separation", attrs=_PER_TASK),
-            "validation_bem_seconds_per_solve": Var("s", "BEM wall time per solve", attrs={
-                "comment": "wall time of the task divided by the pressures it solved"}),
+            "validation_bem_seconds_per_solve": Var("s", "BEM wall time per solve",
+                                                    comment="wall time of the task divided by the pressures it solved"),
         },
         coords=TASK_COORDS,
         doc="The validation's BEM tasks: synthesized pairs solved at every reduced pressure, per (H, bandwidth, eta, "

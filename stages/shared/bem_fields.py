@@ -34,9 +34,9 @@ PARAMS = (
 #: the dimensions the maps add: the loads, and the pixels along the map's two axes
 FIELD_DIMS = ("bem_field_p", "bem_x", "bem_y")
 register_coords(
-    bem_field_p=Var("Pa", "nominal pressure of the map", attrs={"comment": "the loads bem.field_p"}),
-    bem_x=Var("m", "position on the map, first axis", attrs={"comment": "pixel i at i dx"}),
-    bem_y=Var("m", "position on the map, second axis", attrs={"comment": "pixel j at j dx"}),
+    bem_field_p=Var("Pa", "nominal pressure of the map", comment="the loads bem.field_p"),
+    bem_x=Var("m", "position on the map, first axis", comment="pixel i at i dx"),
+    bem_y=Var("m", "position on the map, second axis", comment="pixel j at j dx"),
 )
 _WHICH = ("of one realization (bem.field_realization) at the loads bem.field_p, on the BEM's map "
           "(periodic, pixels bem_x, bem_y)")
@@ -44,15 +44,15 @@ _WHICH = ("of one realization (bem.field_realization) at the loads bem.field_p, 
 MAPS = {
     "bem": {
         "bem_pressure_map": Var("Pa", "contact pressure map, BEM", optional=True,
-                                attrs={"comment": f"local contact pressure {_WHICH}; 0 out of contact"}),
+                                comment=f"local contact pressure {_WHICH}; 0 out of contact"),
         "bem_gap_map": Var("m", "gap map, BEM", optional=True,
-                           attrs={"comment": f"local gap between the surfaces {_WHICH}; 0 in contact"}),
+                           comment=f"local gap between the surfaces {_WHICH}; 0 in contact"),
     },
     "interface_bem": {
         "exact_pressure_map": Var("Pa", "contact pressure map, interface BEM", optional=True,
-                                  attrs={"comment": f"local contact pressure {_WHICH}; 0 out of contact"}),
+                                  comment=f"local contact pressure {_WHICH}; 0 out of contact"),
         "exact_gap_map": Var("m", "gap map, interface BEM", optional=True,
-                             attrs={"comment": f"local gap, the Reynolds flow's {_WHICH}; 0 in contact"}),
+                             comment=f"local gap, the Reynolds flow's {_WHICH}; 0 in contact"),
     },
 }
 

@@ -176,5 +176,5 @@ def add_solve_attrs(inp: StageInput, ds: xr.Dataset, band: dict) -> None:
 
 
 #: the coordinate realization of the stages that solve BEM maps
-REALIZATION = Var("1", "realization (surface pair)", attrs={"comment": "index of the surface pair: random pairs; a "
-                                                                      "single 0 for the measured maps"})
+REALIZATION = Var("1", "realization (surface pair)", comment="index of the surface pair: random pairs; a "
+                                                            "single 0 for the measured maps")

@@ -51,18 +51,18 @@ FLASH_KEYS = tuple(f"friction.{p.name}" for p in FLASH_PARAMS) + tuple(f"numeric
 #: outputs the friction stage writes with the flash temperature (when asked for in outputs.variables)
 FLASH_OUTPUTS = {
     "friction_coefficient_isothermal": Var("1", "friction coefficient mu, isothermal", optional=True,
-                                           attrs={"comment": "hysteretic friction coefficient without the flash "
-                                                             "temperature; eq 61"}),
+                                           comment="hysteretic friction coefficient without the flash "
+                                                   "temperature; eq 61"),
     "flash_temperature": Var("K", "flash temperature T_q at q1", optional=True,
-                             attrs={"comment": "temperature of the asperity contacts at the highest magnification"}),
+                             comment="temperature of the asperity contacts at the highest magnification"),
     "background_temperature_rise": Var("K", "background temperature rise", optional=True,
-                                       attrs={"comment": "background (cumulative) temperature rise of the nominal "
-                                                         "contact at the end of sliding (semi-infinite rubber)"}),
+                                       comment="background (cumulative) temperature rise of the nominal "
+                                               "contact at the end of sliding (semi-infinite rubber)"),
     "flash_temperature_profile": Var("K", "contact temperature T_q at magnification q", optional=True,
-                                     attrs={"comment": "temperature T_q of the contacts observed at magnification q"}),
+                                     comment="temperature T_q of the contacts observed at magnification q"),
     "frictional_heating": Var("W/m^2", "frictional heating per unit ln q", optional=True,
-                              attrs={"comment": "heat released per unit nominal area and time per unit ln q, "
-                                                "sigma0 v d mu / d ln q"}),
+                              comment="heat released per unit nominal area and time per unit ln q, "
+                                      "sigma0 v d mu / d ln q"),
 }
 
 #: a flash-temperature output asked for without friction.flash = true

@@ -77,35 +77,35 @@ DMA_PARAMS = (
 #: outputs of the dma source (optional: ask for any of them in outputs.variables)
 DMA_OUTPUTS = {
     "sweep_log10_aT": Var("1", "log10 a_T of each DMA sweep", optional=True,
-                          attrs={"comment": "log10 of the horizontal shift a_T of each DMA sweep to T_ref"}),
+                          comment="log10 of the horizontal shift a_T of each DMA sweep to T_ref"),
     "sweep_log10_bT": Var("1", "log10 of the vertical shift b_T of each DMA sweep", optional=True),
     "sweep_shift_residual": Var("1", "rms residual of each sweep (decades)", optional=True,
-                                attrs={"comment": "rms of log10 E' and log10 E'' of each sweep about the shifted "
-                                                  "master curve"}),
+                                comment="rms of log10 E' and log10 E'' of each sweep about the shifted "
+                                        "master curve"),
     "sweep_wlf_residual": Var("1", "WLF residual of log10 a_T (decades)", optional=True,
-                              attrs={"comment": "log10 a_T of each sweep minus the fitted shift law (WLF or "
-                                                  "WLF-Arrhenius, shift_law)"}),
+                              comment="log10 a_T of each sweep minus the fitted shift law (WLF or "
+                                        "WLF-Arrhenius, shift_law)"),
     "sweep_overlap": Var("1", "overlap with the neighbour sweep (decades)", optional=True,
-                         attrs={"comment": "overlap with the neighbour it was shifted onto: log10 frequency range "
-                                           "both sweeps cover after the overlap shift; each sweep is laid on its "
-                                           "neighbour nearer T_ref (NaN for the reference)"}),
+                         comment="overlap with the neighbour it was shifted onto: log10 frequency range "
+                                 "both sweeps cover after the overlap shift; each sweep is laid on its "
+                                 "neighbour nearer T_ref (NaN for the reference)"),
     "sweep_pair_misfit": Var("1", "misfit to the neighbour sweep (decades)", optional=True,
-                             attrs={"comment": "rms distance to the neighbour it was shifted onto, in the overlap: "
-                                               "rms of the log10 distance between the two curves of the shifted "
-                                               "quantity (shift_on) over their overlap, at the overlap shift"}),
+                             comment="rms distance to the neighbour it was shifted onto, in the overlap: "
+                                     "rms of the log10 distance between the two curves of the shifted "
+                                     "quantity (shift_on) over their overlap, at the overlap shift"),
     "sweep_kk_deviation": Var("1", "Kramers-Kronig deviation of E'", optional=True,
-                              attrs={"comment": "rms relative deviation of E' from its Kramers-Kronig reconstruction "
-                                                "from E''"}),
+                              comment="rms relative deviation of E' from its Kramers-Kronig reconstruction "
+                                      "from E''"),
     "relaxation_strength": Var("Pa", "relaxation strengths E_k", optional=True,
-                               attrs={"comment": "moduli E_k of the fitted generalized Maxwell spectrum at T_ref"}),
+                               comment="moduli E_k of the fitted generalized Maxwell spectrum at T_ref"),
     "relaxed_modulus": Var("Pa", "relaxed modulus E0 of the fitted spectrum", optional=True),
     "spectrum_fit_residual": Var("1", "rms relative residual of the spectrum fit", optional=True,
-                                 attrs={"comment": "rms relative residual of E' and E'' about the fitted spectrum"}),
+                                 comment="rms relative residual of E' and E'' about the fitted spectrum"),
     "dma_temperature": Var("K", "temperature of each DMA point", optional=True,
-                           attrs={"comment": "points of a sweep logged at more than bins_per_decade per decade are "
-                                             "bin means (log10 E', log10 E'', log10 omega)"}),
+                           comment="points of a sweep logged at more than bins_per_decade per decade are "
+                                   "bin means (log10 E', log10 E'', log10 omega)"),
     "dma_reduced_omega": Var("rad/s", "reduced angular frequency omega a_T", optional=True,
-                             attrs={"comment": "of each DMA point"}),
+                             comment="of each DMA point"),
     "dma_storage_modulus": Var("Pa", "E' of each DMA point divided by b_T", optional=True),
     "dma_loss_modulus": Var("Pa", "E'' of each DMA point divided by b_T", optional=True),
 }

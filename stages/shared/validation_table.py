@@ -39,47 +39,47 @@ CASE = ("hurst", "bandwidth", "eta")
 TABLE_COORDS = {
     "theory": THEORY,
     "range": Var("1", "range of the deviation table",
-                 attrs={"comment": "the quantity and the BEM A/A0 interval it covers"}),
+                 comment="the quantity and the BEM A/A0 interval it covers"),
     "lattice_kind": Var("1", "PSD sampling on the BEM lattice",
-                        attrs={"comment": "point (sampled at |k|) or cell (averaged over the mode's cell)"}),
+                        comment="point (sampled at |k|) or cell (averaged over the mode's cell)"),
 }
 _MEAN = "mean over realizations"
 _IN_RANGE = "over every case and load in the range"
 OUTPUTS = {
     "validation_bem_area": Var("1", "BEM reference A/A0",
-                               attrs={"comment": f"BEM reference, extrapolated to zero pixel size; {_MEAN}"}),
+                               comment=f"BEM reference, extrapolated to zero pixel size; {_MEAN}"),
     "validation_bem_area_error": Var("1", "error bar of the BEM A/A0",
-                                     attrs={"comment": "realization standard error and half the extrapolation step, "
-                                                       "in quadrature"}),
+                                     comment="realization standard error and half the extrapolation step, "
+                                             "in quadrature"),
     "validation_bem_area_finest": Var("1", "BEM A/A0 on the finest rung",
-                                      attrs={"comment": f"on the finest solved rung; {_MEAN}"}),
+                                      comment=f"on the finest solved rung; {_MEAN}"),
     "validation_bem_gap": Var("m", "BEM mean separation on the finest rung",
-                              attrs={"comment": f"on the finest solved rung; {_MEAN}"}),
+                              comment=f"on the finest solved rung; {_MEAN}"),
     "validation_bem_gap_error": Var("m", "error bar of the BEM mean separation",
-                                    attrs={"comment": "realization standard error and the change over the last "
-                                                      "refinement, in quadrature"}),
-    "validation_theory_area": Var("1", "A/A0 of each theory variant", attrs={"comment": "on the case's spectrum"}),
+                                    comment="realization standard error and the change over the last "
+                                            "refinement, in quadrature"),
+    "validation_theory_area": Var("1", "A/A0 of each theory variant", comment="on the case's spectrum"),
     "validation_theory_gap": Var("m", "mean separation of each theory variant",
-                                 attrs={"comment": "on the case's spectrum"}),
+                                 comment="on the case's spectrum"),
     "validation_area_ratio": Var("1", "theory / BEM ratio of A/A0 per variant"),
     "validation_gap_ratio": Var("1", "theory / BEM ratio of the separation",
-                                attrs={"comment": "of the mean separation, per variant"}),
+                                comment="of the mean separation, per variant"),
     "validation_kappa_bem": Var("1", "kappa = (A/A0) E* g / p of the BEM"),
     "validation_kappa_theory": Var("1", "kappa = (A/A0) E* g / p of each theory variant"),
     "validation_rms_slope": Var("1", "rms slope g of the case's spectrum",
-                                attrs={"comment": "of the case's combined spectrum on its band"}),
-    "validation_deviation_max": Var("1", "largest |theory / BEM - 1| in the range", attrs={"comment": _IN_RANGE}),
-    "validation_deviation_mean": Var("1", "mean of theory / BEM - 1 in the range", attrs={"comment": _IN_RANGE}),
+                                comment="of the case's combined spectrum on its band"),
+    "validation_deviation_max": Var("1", "largest |theory / BEM - 1| in the range", comment=_IN_RANGE),
+    "validation_deviation_mean": Var("1", "mean of theory / BEM - 1 in the range", comment=_IN_RANGE),
     "validation_deviation_case_max": Var("1", "largest |theory / BEM - 1| per case",
-                                         attrs={"comment": "over the loads in the range"}),
+                                         comment="over the loads in the range"),
     "validation_bem_error_max": Var("1", "largest relative BEM error bar in the range",
-                                    attrs={"comment": "relative error bar of the BEM reference"}),
+                                    comment="relative error bar of the BEM reference"),
     "validation_lattice_variance_ratio": Var("1", "lattice / continuum hrms^2 of the band",
-                                             attrs={"comment": "hrms^2 the BEM lattice holds / the continuum "
-                                                               "integral of the band"}),
+                                             comment="hrms^2 the BEM lattice holds / the continuum "
+                                                     "integral of the band"),
     "validation_lattice_slope_ratio": Var("1", "lattice / continuum g^2 of the band",
-                                          attrs={"comment": "g^2 the BEM lattice holds / the continuum integral of "
-                                                            "the band"}),
+                                          comment="g^2 the BEM lattice holds / the continuum integral of "
+                                                  "the band"),
 }
 
 

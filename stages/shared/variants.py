@@ -21,8 +21,8 @@ VARIANT_KEYS = (*CORRECTION_KEYS, "separation.alpha", "numerics.separation_panel
                 "numerics.separation_gauss_points", "numerics.separation_depth")
 
 #: the coordinate ``theory`` of the stages that set the variants side by side
-THEORY = Var("1", "theory variant", attrs={"comment": "persson (eq 19, eq 57), yang_persson, wang_mueser; each "
-                                                      "described in the attribute theory_variants"})
+THEORY = Var("1", "theory variant", comment="persson (eq 19, eq 57), yang_persson, wang_mueser; each "
+                                            "described in the attribute theory_variants")
 
 #: a short description per variant (the ``theory`` coordinate's values)
 DESCRIPTIONS = {
