@@ -22,6 +22,7 @@ from typing import Iterator, Mapping
 
 import xarray as xr
 
+from . import duckarrays  # noqa: F401  (installs itself: see its doc)
 from .errors import UserError
 
 
