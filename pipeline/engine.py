@@ -356,6 +356,7 @@ def _run(scene, outdir, targets, force, report, compute_with, verify=None, check
     for folder in {p.path.parent for p in plans}:
         store.clean_temporaries(folder)
     results = {v: StageResults(_open) for v in scenes}  # each result opened when first read
+    handed: dict[tuple[str, str], xr.Dataset] = {}  # results computed in memory here, handed downstream as they are
     n = len(plans)
     for i, p in enumerate(plans, start=1):
         tag = f"[{i}/{n}] {p.label}"
@@ -371,7 +372,8 @@ def _run(scene, outdir, targets, force, report, compute_with, verify=None, check
         why = "; ".join(p.reasons)
         report.live(f"{tag}: computing ({why})")
         t0 = time.perf_counter()
-        upstream = {up: results[p.variant][up] for up in p.record["upstream"]}
+        upstream = {up: handed[(p.variant, up)] if (p.variant, up) in handed else results[p.variant][up]
+                    for up in p.record["upstream"]}
         shape = shapes[(p.variant, p.stage.name)]
         with quiet_libraries():  # dask's notes on chunks and graphs: the engine's business, not the user's
             ds = _computed(p, scenes[p.variant], upstream, files[i - 1], shape, report)
@@ -381,6 +383,8 @@ def _run(scene, outdir, targets, force, report, compute_with, verify=None, check
                         costlier_with=shape.costlier_with)
         report.finish()
         results[p.variant].add(p.stage.name, p.path)
+        if _in_memory(ds) and ds.nbytes <= LOAD_LIMIT_BYTES:  # handed downstream as compute() hands it, not re-read
+            handed[(p.variant, p.stage.name)] = ds
         report(f"{tag}: computed in {time.perf_counter() - t0:.2f} s ({why}) -> {p.path}")
     reuse.prune(outdir, [p.path for p in plans])
     return results
@@ -414,12 +418,17 @@ def compute(scene: Scene, targets: Iterable[str] | None = None, report: Reporter
     return results
 
 
+def _in_memory(ds: xr.Dataset) -> bool:
+    """Whether every variable of ``ds`` is in memory (none dask-backed)."""
+    return not any(v.chunks is not None for v in ds.variables.values())
+
+
 def _loaded(ds: xr.Dataset, compute_with) -> xr.Dataset:
     """``ds`` with its dask-backed variables computed by ``compute_with`` (what
     :func:`roughcontact.scheduling.scheduler` yields: a scheduler name, a process pool or a client)."""
     from concurrent.futures import Executor
 
-    if not any(v.chunks is not None for v in ds.variables.values()):
+    if _in_memory(ds):
         return ds
     if isinstance(compute_with, Executor):
         return ds.load(scheduler="processes", pool=compute_with)

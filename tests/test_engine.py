@@ -178,3 +178,25 @@ def test_a_variable_several_stages_output_comes_from_the_cheapest():
     from roughcontact.stage import producer_of
 
     assert producer_of("E_star").name == "contact"  # not separation or bem, which need more upstream
+
+
+def test_a_result_computed_in_the_run_is_handed_downstream_without_reading_its_file(tmp_path, monkeypatch):
+    """Upstream results computed in memory go to the next stage as they are (issue 27: a small run
+    reads none of its files back); one reused from a file is read from it; the numbers stay those of
+    a run that reads every upstream result from its file (bit for bit)."""
+    raw = make_scene()
+    with monkeypatch.context() as m:  # as before: every upstream result read back from its file
+        m.setattr(engine, "_in_memory", lambda ds: False)
+        reread = engine.run(scenes.from_dict(raw), tmp_path / "reread", report=engine.Reporter(None))
+    opened = []
+    real = engine._open
+    monkeypatch.setattr(engine, "_open", lambda path: opened.append(path.name) or real(path))
+    handed = engine.run(scenes.from_dict(raw), tmp_path / "handed", report=engine.Reporter(None), force="all",
+                        open_results=False)  # as the command line runs it
+    assert opened == []
+    for stage in handed["base"]:
+        xr.testing.assert_identical(handed["base"][stage].drop_attrs(), reread["base"][stage].drop_attrs())
+    opened.clear()
+    (tmp_path / "handed" / "contact.nc").unlink()
+    engine.run(scenes.from_dict(raw), tmp_path / "handed", report=engine.Reporter(None), open_results=False)
+    assert opened == ["psd.nc"]  # contact recomputed from the psd result of the first run, read from its file
