@@ -12,8 +12,6 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from . import duckarrays  # noqa: F401  (installs itself: see its doc)
-
 #: errors below this are drawn at it (rounding: the method is exact there)
 SMALLEST = 1e-16
 PRESET_MARKERS = {"fast": "v", "default": "D", "accurate": "^"}

@@ -22,8 +22,6 @@ import math
 import numpy as np
 import xarray as xr
 
-from . import duckarrays  # noqa: F401  (installs itself: see its doc)
-
 #: data variables from this size on are compressed
 COMPRESS_BYTES = 16 * 2**10
 #: zlib level: 1 gains nearly all of the size at the least cost in write time

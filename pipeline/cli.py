@@ -158,6 +158,9 @@ def _dispatch(args) -> int:
     if args.command == "reference":
         print(scenes.reference())
         return 0
+    from . import duckarrays
+
+    duckarrays.install()  # this process is ours: xarray needs no dask.array or pint for numpy results
     if args.command == "show":
         return _show(args.file)
     sc = scenes.load(args.scene, preset=args.preset)

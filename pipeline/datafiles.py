@@ -14,7 +14,6 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from . import duckarrays  # noqa: F401  (installs itself: see its doc)
 from .errors import UserError
 from .units import array_to_si
 

@@ -1,24 +1,30 @@
-"""Keep xarray from importing dask.array and pint to build an in-memory numpy result.
+"""The command line's xarray: no dask.array and pint imported to build an in-memory numpy result.
 
 Every ``xarray.Variable`` built from numpy data asks whether the data is a dask array
 (``as_compatible_data``), and every index asks whether it is a pint quantity (``to_numpy``).
 xarray answers with ``isinstance(data, array_type(name))``, and ``array_type`` imports the
-module behind ``name`` whenever it is installed, used or not: 0.2-0.4 s of dask.array (with
-scipy.sparse and scipy.fft) and pint on every run, about the time of importing numpy and xarray
+module behind ``name`` whenever it is installed, used or not; its ``is_dask_collection`` imports
+dask to ask about a plain numpy array. Together 0.25 s of dask, dask.array (with scipy.sparse and
+scipy.fft) and pint on every small run: more than half the time of importing numpy and xarray
 themselves (docs/scale-out.md, "Cold start"). xarray's own comment on the class doing this says
 it exists "to only import pint when required".
 
-No object can be an instance of a class that has not been imported yet, so until ``dask.array``
-(or ``pint``) is in ``sys.modules`` the honest answer to "is this a dask array?" is "no", without
-importing anything. :func:`install` puts an entry in xarray's cache of duck-array modules that
-gives that answer while the module is absent, and hands over to xarray's own entry (importing
-nothing new, since the module is there) as soon as anything has imported it: a chunked sweep,
-``xarray.open_dataset(..., chunks=...)``, a user's own ``import dask.array``. Any other question
-(the module, its version, whether it is available) is answered by xarray's own entry at once.
+No object can be an instance of a class that has not been imported yet, and a numpy array or
+scalar has no ``__dask_graph__``. So until ``dask.array`` (or ``pint``) is in ``sys.modules`` the
+exact answer to "is this a dask array?" is "no", found without importing anything. :func:`install`
+puts an entry in xarray's cache of duck-array modules that gives that answer while the module is
+absent and hands over to xarray's own entry (which then imports nothing new) as soon as anything
+has imported it: a chunked sweep, ``xarray.open_dataset(..., chunks=...)``, a user's own ``import
+dask.array``; any other question (the module, its version, whether it is available) goes to
+xarray's own entry at once. It also answers ``is_dask_collection`` for a numpy array or scalar
+while dask is not imported, and hands everything else to xarray's function.
 
-The entry is installed only into the xarray this was written against (the cache, its class and
-``array_type`` present); with any other layout :func:`install` does nothing and xarray behaves as
-it always does, importing what it imports (``tests/test_duckarrays.py`` says which).
+This changes another library's private state, so only roughcontact's own program does it: the
+command line (:mod:`roughcontact.cli`) calls :func:`install` for the commands that compute or
+read results. ``import roughcontact`` (the Python API, in a user's process) leaves xarray as it is.
+:func:`install` does nothing, and says so, with an xarray laid out otherwise than the one this was
+written against (the cache, its class, ``array_type`` and ``is_dask_collection`` present): xarray
+then imports what it always imported (``tests/test_duckarrays.py``).
 """
 
 from __future__ import annotations
@@ -42,7 +48,8 @@ def _imported(module: str) -> bool:
     return loaded is not None and not getattr(getattr(loaded, "__spec__", None), "_initializing", False)
 
 
-def _layout_known() -> bool:
+def supported() -> bool:
+    """Whether this xarray is laid out as :func:`install` expects."""
     return (
         _pycompat is not None
         and isinstance(getattr(_pycompat, "_cached_duck_array_modules", None), dict)
@@ -52,7 +59,7 @@ def _layout_known() -> bool:
     )
 
 
-if _layout_known():
+if supported():
 
     class _UntilImported(_pycompat.DuckArrayModule):
         """xarray's cache entry for a duck-array library not imported yet (see the module doc)."""
@@ -101,7 +108,7 @@ def install() -> bool:
 
     Libraries already imported, or already asked about, are left with xarray's own entry.
     """
-    if not _layout_known():
+    if not supported():
         return False
     cache = _pycompat._cached_duck_array_modules
     for name, module in WATCHED.items():
@@ -114,7 +121,5 @@ def install() -> bool:
 
 def installed(name: str) -> bool:
     """Whether xarray's cache holds the not-yet-imported entry for ``name`` (for tests)."""
-    return _layout_known() and type(_pycompat._cached_duck_array_modules.get(name)).__name__ == "_UntilImported"
+    return supported() and type(_pycompat._cached_duck_array_modules.get(name)).__name__ == "_UntilImported"
 
-
-install()

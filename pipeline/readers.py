@@ -30,7 +30,6 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from . import duckarrays  # noqa: F401  (installs itself: see its doc)
 from .containers import read_container
 from .datafiles import column_to_si, netcdf_psd
 from .dma import read_dma

@@ -12,8 +12,6 @@ from typing import Callable, Iterator, Mapping
 
 import xarray as xr
 
-from . import duckarrays  # noqa: F401  (installs itself: see its doc)
-
 
 class StageResults(Mapping[str, xr.Dataset]):
     """``results[stage]`` -> the stage's Dataset, opened on first access (in memory if small, else

@@ -22,7 +22,6 @@ from typing import Iterator, Mapping
 
 import xarray as xr
 
-from . import duckarrays  # noqa: F401  (installs itself: see its doc)
 from .errors import UserError
 
 

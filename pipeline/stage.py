@@ -30,7 +30,6 @@ from typing import Any, Callable, Mapping
 import numpy as np
 import xarray as xr
 
-from . import duckarrays  # noqa: F401  (installs itself: see its doc)
 from .errors import ComputationError, SceneWarning, UserError
 from .schema import MISSING, REQUIRED, Param, Section
 from .units import readable

@@ -23,12 +23,7 @@ from typing import Any, BinaryIO, Callable, Mapping
 import numpy as np
 import xarray as xr
 
-from . import (
-    cf,
-    duckarrays,  # noqa: F401  (installs itself: see its doc)
-    integrity,
-    ncio,
-)
+from . import cf, integrity, ncio
 from .errors import OutputError
 from .version import __version__
 

@@ -1,5 +1,6 @@
-"""xarray without dask.array and pint for numpy results (pipeline/duckarrays.py, issue 27): a
-small run imports neither, and once they are imported xarray still sees their arrays.
+"""The command line's xarray without dask.array and pint for numpy results (pipeline/duckarrays.py,
+issue 27): a small run imports neither, once they are imported xarray still sees their arrays, and
+the Python API leaves xarray as it is.
 
 Each check runs in a fresh interpreter: which modules a process has imported is the fact tested.
 """
@@ -25,7 +26,7 @@ def _python(code: str, env: dict | None = None) -> dict:
     return json.loads(done.stdout.strip().splitlines()[-1])
 
 
-needs_layout = pytest.mark.skipif(not duckarrays.install(), reason="an xarray whose duck-array cache this doesn't know")
+needs_layout = pytest.mark.skipif(not duckarrays.supported(), reason="an xarray laid out otherwise")
 
 
 @needs_layout
@@ -35,10 +36,10 @@ def test_a_small_run_imports_neither_dask_nor_pint(tmp_path):
     env = dict(os.environ, XDG_CACHE_HOME=str(tmp_path / "cache"))
     _python("import json; from roughcontact import scene; scene.load('default'); print('{}')", env)
     seen = _python(f"""
-        import json, sys
-        from pathlib import Path
-        from roughcontact import engine, scene
-        engine.run(scene.load("default"), Path({str(tmp_path / "out")!r}), report=engine.Reporter(None))
+        import contextlib, io, json, sys
+        from roughcontact.cli import main
+        with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+            assert main(["run", "default", "--outdir", {str(tmp_path / "out")!r}]) == 0
         print(json.dumps({{m: m in sys.modules for m in ("dask", "dask.array", "pint", "distributed")}}))
     """, env)
     assert seen == {"dask": False, "dask.array": False, "pint": False, "distributed": False}
@@ -50,8 +51,8 @@ def test_dask_and_pint_arrays_are_still_seen_once_imported():
         import json, sys
         import numpy as np
         import xarray as xr
-        import roughcontact.stage  # installs the entries
         from roughcontact import duckarrays
+        duckarrays.install()
         before = xr.DataArray(np.zeros(3), dims="x", coords={"x": [0.0, 1.0, 2.0]})
         out = {"installed": duckarrays.installed("dask") and duckarrays.installed("pint"),
                "dask imported by numpy data": "dask.array" in sys.modules or "dask" in sys.modules,
@@ -81,8 +82,20 @@ def test_libraries_imported_before_keep_xarrays_own_entries():
     seen = _python("""
         import json
         import dask.array, pint
-        import roughcontact.stage
         from roughcontact import duckarrays
+        duckarrays.install()
         print(json.dumps([duckarrays.installed("dask"), duckarrays.installed("pint")]))
     """)
     assert seen == [False, False]
+
+
+@needs_layout
+def test_the_python_api_leaves_xarray_as_it_is():
+    seen = _python("""
+        import json, sys
+        import roughcontact as rc
+        from roughcontact import duckarrays
+        rc.compute("default")
+        print(json.dumps([duckarrays.installed("dask"), duckarrays.installed("pint"), "dask.array" in sys.modules]))
+    """)
+    assert seen == [False, False, True]  # xarray imported dask.array for the first DataArray, as it always does
