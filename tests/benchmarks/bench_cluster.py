@@ -7,10 +7,14 @@ The built-in ``validation`` scene cut to a size that runs in a minute or two on 
 H 0.5 and 0.8, bandwidth 16, eta 0 and -1, 2 realizations, 64^2 and 128^2 grids (4 and 8 pixels
 per wavelength), 10 loads: 16 BEM tasks of two sizes, and the deviation table. Each run times
 ``engine.run`` into an empty folder: the whole run and, inside it, the BEM tasks alone (first
-submitted to last received). One process per version of roughcontact starts a LocalCluster per worker count first
-(not timed) and keeps them; the runs are interleaved round by round, a different worker count
-first each round (the machine is shared: a round's runs see about the same load), and the speed-up
-is the median over rounds of t(1 worker) / t(n workers) of the same round. ``--baseline REV``
+submitted to last received). One process per version of roughcontact starts, for each run, a
+LocalCluster of that many workers alone on the machine, and has every worker import roughcontact
+(not timed; the cluster is closed after the run); the runs are interleaved round by round, a
+different worker count first each round (the machine is shared: a round's runs see about the same
+load), and the speed-up is the median over rounds of t(1 worker) / t(n workers) of the same round.
+``--keep-clusters`` starts the clusters of all worker counts first and keeps them for every run,
+as this benchmark did before: their idle workers, nannies and schedulers then take CPU from the
+two cores that the measured run needs (1.69-1.79x against 1.88-1.90x alone, docs/scale-out.md). ``--baseline REV``
 then does the same with git revision REV of this repository (exported and imported from a
 temporary folder, as bench_startup.py does): before and after in one run, the versions one after
 the other. The load average is printed with every run.
@@ -60,16 +64,24 @@ def scene_dict(smoke: bool) -> dict:
     return raw
 
 
-def child(counts: list[int], repeat: int, outdir: str, smoke: bool) -> None:
-    """The measurements of one version (run in its own process): a LocalCluster per worker count,
-    all started first (not timed) and kept, then ``repeat`` rounds of one run on each, the cases
-    interleaved (a different one first each round); one JSON line per run."""
+def child(counts: list[int], repeat: int, outdir: str, smoke: bool, keep: bool = False) -> None:
+    """The measurements of one version (run in its own process): ``repeat`` rounds of one run on a
+    LocalCluster of each worker count, the cases interleaved (a different one first each round);
+    one JSON line per run. Each run has its cluster to itself, started and warmed up before it
+    (not timed) and closed after it; ``keep``: the clusters of all counts started first and kept."""
     from contextlib import ExitStack
 
     from distributed import Client, LocalCluster
 
     import roughcontact.scheduling as scheduling
     from roughcontact import engine, scene as scenes
+
+    def started(stack: ExitStack, workers: int):
+        cluster = stack.enter_context(LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                                                   dashboard_address=None))
+        client = stack.enter_context(Client(cluster, set_as_default=False))
+        client.run(scheduling._worker_version)  # every worker imports roughcontact and its stages now
+        return cluster, client
 
     marks = {}
     real = scheduling._as_completed
@@ -81,19 +93,19 @@ def child(counts: list[int], repeat: int, outdir: str, smoke: bool) -> None:
 
     scheduling._as_completed = timed
     sc = scenes.from_dict(scene_dict(smoke))
-    with ExitStack() as stack:
-        clusters = {w: stack.enter_context(LocalCluster(n_workers=w, threads_per_worker=1, processes=True,
-                                                        dashboard_address=None)) for w in counts}
-        clients = {w: stack.enter_context(Client(c, set_as_default=False)) for w, c in clusters.items()}
+    with ExitStack() as kept:
+        clusters = {w: started(kept, w) for w in counts} if keep else {}
         for r in range(repeat):
             for w in counts[r % len(counts):] + counts[:r % len(counts)]:
-                load = os.getloadavg()[0]
-                cpu0 = clients[w].run(_cpu)
-                t0 = time.perf_counter()
-                res = engine.run(sc, Path(outdir) / f"{w}-{r}", report=engine.Reporter(None),
-                                 scheduler=clusters[w].scheduler_address)
-                wall = time.perf_counter() - t0
-                cpu = [c - cpu0[k] for k, c in clients[w].run(_cpu).items()]
+                with ExitStack() as own:
+                    cluster, client = clusters[w] if keep else started(own, w)
+                    load = os.getloadavg()[0]
+                    cpu0 = client.run(_cpu)
+                    t0 = time.perf_counter()
+                    res = engine.run(sc, Path(outdir) / f"{w}-{r}", report=engine.Reporter(None),
+                                     scheduler=cluster.scheduler_address)
+                    wall = time.perf_counter() - t0
+                    cpu = [c - cpu0[k] for k, c in client.run(_cpu).items()]
                 area = res["base"]["validation_bem"]["validation_bem_contact_area_ratio"]
                 print(json.dumps({"round": r, "workers": w, "run": wall, "tasks": marks["end"] - marks["start"],
                                   "solved": int(area.notnull().sum()), "load": load, "cpu": cpu}), flush=True)
@@ -113,11 +125,12 @@ def dedicated(cpu: list[float], cores: int) -> float:
     return max(max(cpu), sum(cpu) / min(cores, len(cpu)))
 
 
-def _measure(version: str, counts: list[int], repeat: int, outdir: Path, env: dict, smoke: bool) -> dict:
+def _measure(version: str, counts: list[int], repeat: int, outdir: Path, env: dict, smoke: bool, keep: bool) -> dict:
     """{workers: [run of each round]} of one version, printed as they come."""
     cmd = [sys.executable, str(HERE), "--child", ",".join(map(str, counts)), str(repeat), str(outdir)]
+    cmd += (["--smoke"] if smoke else []) + (["--keep-clusters"] if keep else [])
     runs: dict[int, list] = {w: [] for w in counts}
-    with subprocess.Popen(cmd + (["--smoke"] if smoke else []), env=env, stdout=subprocess.PIPE, text=True) as proc:
+    with subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, text=True) as proc:
         for line in proc.stdout:
             m = json.loads(line)
             runs[m["workers"]].append(m)
@@ -136,10 +149,13 @@ def main() -> None:
     ap.add_argument("--baseline", metavar="REV", help="also run git revision REV (before/after in one run)")
     ap.add_argument("--baseline-repeat", type=int, default=None, help="rounds for REV (default --repeat)")
     ap.add_argument("--smoke", action="store_true", help="one run of 2 workers on a tiny scene")
+    ap.add_argument("--keep-clusters", action="store_true",
+                    help="start the clusters of all worker counts first and keep them (as before: sharing the cores)")
     ap.add_argument("--child", nargs=3, metavar=("WORKERS", "REPEAT", "OUTDIR"), help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.child:
-        return child([int(w) for w in args.child[0].split(",")], int(args.child[1]), args.child[2], SMOKE)
+        return child([int(w) for w in args.child[0].split(",")], int(args.child[1]), args.child[2], SMOKE,
+                     args.keep_clusters)
     counts = [2] if SMOKE else sorted({int(w) for w in args.workers.split(",")} | {1})
     repeat = 1 if SMOKE else args.repeat
     with tempfile.TemporaryDirectory() as tmp:
@@ -148,7 +164,8 @@ def main() -> None:
             from bench_startup import _baseline
 
             versions[args.baseline] = (_baseline(args.baseline, Path(tmp)), args.baseline_repeat or repeat)
-        times = {v: _measure(v, counts, n, Path(tmp) / v, env, SMOKE) for v, (env, n) in versions.items()}
+        times = {v: _measure(v, counts, n, Path(tmp) / v, env, SMOKE, args.keep_clusters)
+                 for v, (env, n) in versions.items()}
     if SMOKE:
         return print("smoke: the 2-worker LocalCluster completed the tiny scene")
     print("\nspeed-up from 1 worker (median over rounds of the same round's ratio):")
