@@ -5,7 +5,8 @@ shape each variable was hashed in, and a sha256 over (a) per variable, the sum m
 the sha256 of each block (its name, position and little-endian bytes), and (b) every attribute
 of the file (global and per variable) except the checksum itself. The block sums do not depend
 on the order of the blocks, so the engine hashes the blocks it computes as it writes them
-(:class:`Checksums`, the dask chunks) and reads back only the variables written in one piece.
+(:class:`Checksums`, the dask chunks), the numeric variables written in one piece from the values
+the store encoded for the file (:func:`block_sums`), and reads back only text variables.
 
 Detected: any changed value of any variable or coordinate (a flipped bit, an edited number, NaN
 for a number), a changed, added or removed attribute (``parameters`` with the stage key kept,
@@ -22,6 +23,7 @@ import itertools
 import json
 import math
 from pathlib import Path
+from typing import Mapping
 
 import numpy as np
 
@@ -111,7 +113,8 @@ def _default_block(shape) -> tuple[int, ...]:
 
 
 def _variable_sum(var, name: str, block) -> int:
-    """The block sum of a variable read from an open netCDF4 file on the grid of ``block``."""
+    """The block sum of a variable on the grid of ``block``: read from an open netCDF4 file, or a
+    numpy array."""
     shape = tuple(var.shape)
     total = 0
     # a block of another rank than the variable (a damaged checksum attribute) raises ValueError,
@@ -122,6 +125,19 @@ def _variable_sum(var, name: str, block) -> int:
             values = np.asarray(var[region] if region else var[...])
         total = (total + block_digest(name, values, start)) % 2**256
     return total
+
+
+def block_sums(variables: Mapping) -> dict[str, tuple[tuple[int, ...], int]]:
+    """Block shape and block sum of each numeric variable (``{name: xarray.Variable}``) in memory,
+    on the grid :func:`stamp` reads a variable back in: the same numbers as reading back the
+    variable written with exactly these values. Text variables are left out (they are read back)."""
+    out = {}
+    for name, var in variables.items():
+        values = np.asarray(var.values)
+        if values.dtype.kind in "fiu":
+            block = _default_block(values.shape)
+            out[str(name)] = (block, _variable_sum(values, str(name), block))
+    return out
 
 
 def _digest(nc, blocks: dict, known: dict[str, int]) -> str:

@@ -364,3 +364,36 @@ def test_the_checksum_covers_every_variable_and_attribute(tmp_path):
         assert set(record["blocks"]) == set(ds.variables)
     assert record["blocks"]["contact_area_ratio"][-1] == 4 or 4 in record["blocks"]["contact_area_ratio"]
     assert integrity.verify(tmp_path / "contact.nc") is True
+
+
+def test_checksums_hashed_in_memory_are_those_of_the_file_read_back(tmp_path):
+    """A result written in one piece is hashed from the values the store encoded, not read back
+    (issue 27): the checksum must be the one reading the file back gives, for values that change on
+    the way to the file (a variable packed into scaled integers with a fill value for NaN; booleans,
+    written as bytes) or might (NaN with its sign bit set, -0.0; text; scalars; a compressed
+    variable), and for real results."""
+    from roughcontact import cf, store
+
+    negative_nan = -np.full(3, np.nan)
+    assert np.signbit(negative_nan).all()
+    tricky = xr.Dataset(
+        {"with_nan": ("x", np.array([1.0, -0.0, 2.0]) + np.where([False, True, False], negative_nan, 0.0)),
+         "flag": ("x", np.array([True, False, True])), "count": ("x", np.arange(3, dtype=np.int32)),
+         "label": ("x", np.array(["a", "bb", "ccc"])), "scalar": ((), 2.5),
+         "large": (("x", "y"), np.linspace(0.0, 1.0, 3 * 4000).reshape(3, 4000))},
+        coords={"x": [0.1, 0.2, 0.3], "y": np.arange(4000.0)}, attrs={"title": "tricky", "ok": "True"})
+    tricky["packed"] = ("x", np.array([0.25, np.nan, 1.5]))
+    tricky["packed"].encoding = {"dtype": "int16", "scale_factor": 0.01, "_FillValue": -1}  # stored as integers
+    run = engine.run(make_scene(numerics=SMALL), tmp_path / "run", report=_quiet())
+    cases = {"tricky": tricky, **{name: ds.drop_attrs(deep=False).drop_encoding() for name, ds in run["base"].items()}}
+    for name, ds in cases.items():
+        path = tmp_path / f"{name}.nc"
+        store.write(ds, path)
+        stored = json.loads(xr.open_dataset(path).attrs[integrity.ATTR])
+        copy = tmp_path / f"{name}-read-back.nc"
+        copy.write_bytes(path.read_bytes())
+        integrity.stamp(copy)  # every variable read back from the file
+        assert json.loads(xr.open_dataset(copy).attrs[integrity.ATTR]) == stored, name
+        assert integrity.verify(path) is True, name
+    with xr.open_dataset(tmp_path / "tricky.nc") as back:
+        assert "zlib" in str(cf.encoding(tricky)["large"]) and back["large"].encoding.get("zlib")
