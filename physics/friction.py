@@ -24,35 +24,26 @@ See docs/theory.md, section "Friction"; Persson, J. Chem. Phys. 115, 3840 (2001)
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from .corrections import corrected_area
 from .inputs import require_pressure
 from .quadrature import cumulative_integral, gauss_legendre, running_weighted_integral
+from .rows import row_chunks
 from .special import erf
 from .viscoelastic import modulus_at
 
 #: Elements of one temporary array of the kernels below (125 KiB of float64): they work through
-#: their leading axes (velocities, cases) a few rows at a time, so that each of their many
-#: temporaries stays below glibc's mmap threshold (128 KiB) and in a core's L2 cache, and the
-#: memory one chunk frees is reused by the next. Whole-array temporaries (2.5-7.7 MB each for 100
-#: velocities x 4 cases) were mapped fresh from the OS and returned to it on every call: about 20 000
-#: page faults and as much system time as computing. Chunking changes no value (docs/scale-out.md).
+#: their leading axes (velocities, cases) a few rows at a time (:mod:`roughcontact.physics.rows`).
+#: Whole-array temporaries (2.5-7.7 MB each for 100 velocities x 4 cases) were mapped fresh from
+#: the OS and returned to it on every call: about 20 000 page faults and as much system time as
+#: computing. Chunking changes no value (docs/scale-out.md).
 CHUNK_ELEMENTS = 16_000
 
 
 def _row_chunks(lead: tuple, per_row: int):
-    """Index tuples of consecutive rows of the leading shape ``lead`` (each row ``per_row``
-    elements of work), about :data:`CHUNK_ELEMENTS` elements a chunk; ``()`` for no leading axes."""
-    if not lead:
-        yield ()
-        return
-    rows = math.prod(lead)
-    step = max(1, CHUNK_ELEMENTS // max(int(per_row), 1))
-    for start in range(0, rows, step):
-        yield np.unravel_index(np.arange(start, min(start + step, rows)), lead)
+    """:func:`roughcontact.physics.rows.row_chunks` with this module's :data:`CHUNK_ELEMENTS`."""
+    return row_chunks(lead, per_row, CHUNK_ELEMENTS)
 
 
 def _k(sigma0, nu):

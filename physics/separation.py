@@ -31,7 +31,13 @@ import numpy as np
 from .inputs import require_pressure
 from .layered import layered_spectrum, modulus_weight
 from .quadrature import cumulative_integral, gauss_legendre_panels, integral_to, inverse_cumulative_integral
+from .rows import row_chunks
 from .special import erf, erfcx, exp1, exp1_fast
+
+#: elements of one temporary of :func:`mean_separation` per chunk of rows (512 KiB of float64: in
+#: a core's L2 cache; measured best among 16 000-262 144 on the bands' 32 million nodes, where the
+#: whole-array kernel took 1.1-3.5 times as long, docs/scale-out.md)
+CHUNK = 65_536
 
 #: eps = exp(\\int_0^inf 2x ln x exp(-x^2) dx) = exp(-gamma_Euler / 2) = 0.749306..., seed eq 28.
 EPSILON = float(np.exp(-0.5 * np.euler_gamma))
@@ -413,6 +419,20 @@ def mean_separation(p, s, weight, count, s_tail, q_tail, *, E_star, alpha, refin
     J. Phys.: Condens. Matter 20, 215214 (2008).
     """
     a = require_pressure(p, positive=True)[..., None] / E_star
+    s, weight, count, s_tail, q_tail = (np.asarray(x) for x in (s, weight, count, s_tail, q_tail))
+    lead = np.broadcast_shapes(a.shape[:-1], s.shape[:-1], weight.shape[:-1], count.shape[:-1], s_tail.shape[:-1],
+                               q_tail.shape)
+    rows = [np.broadcast_to(x, lead + x.shape[-1:]) for x in (a, s, weight, count, s_tail)]
+    rows.append(np.broadcast_to(q_tail, lead))
+    terms = {k: c for k, c in energy_factor_terms(refinement, alpha).items() if k != 0}
+    u = np.empty(lead + count.shape[-1:])
+    for chunk in row_chunks(lead, s.shape[-1], CHUNK):  # a few rows at a time: every temporary stays in cache
+        u[chunk] = _mean_separation_rows(*(x[chunk] for x in rows), alpha, terms)
+    return u
+
+
+def _mean_separation_rows(a, s, weight, count, s_tail, q_tail, alpha, terms):
+    """:func:`mean_separation` on rows (rows, 1), (rows, K), (rows, K), (rows, m), (rows, m), (rows,)."""
     with np.errstate(divide="ignore", over="ignore", under="ignore"):
         z = a * np.where(s > 0, 1.0 / np.where(s > 0, s, 1.0), np.inf)
         kernel = exp1_fast(z * z)  # numpy E1: 3-4x scipy's exp1 here (the bands' draws multiply its calls)
@@ -420,9 +440,7 @@ def mean_separation(p, s, weight, count, s_tail, q_tail, *, E_star, alpha, refin
     body = _cumulative_at(kernel, count)
     tail = e1_integral(s_tail, a)
     u = alpha / np.sqrt(np.pi) * (body + tail / q_tail[..., None])
-    for k, c in energy_factor_terms(refinement, alpha).items():
-        if k == 0:
-            continue
+    for k, c in terms.items():
         with np.errstate(divide="ignore", invalid="ignore"):
             zt = np.where(s_tail > 0, a / np.where(s_tail > 0, s_tail, 1.0), np.inf)
         # on [0, s_tail] J_k(a/s) rises from 0 to J_k(a/s_tail): midpoint of the bounds, error

@@ -389,3 +389,33 @@ def test_good_scene_runs_through_the_cli(tmp_path):
     path = _write_scene(tmp_path)
     assert cli.main(["run", str(path), "--outdir", str(tmp_path / "out"), "--quiet"]) == 0
     assert (tmp_path / "out" / "separation.nc").is_file()
+
+
+@pytest.mark.parametrize("chunk", [1, 700, 65_536])
+def test_the_kernel_working_row_by_row_changes_no_value(monkeypatch, chunk):
+    """mean_separation works through its leading axes (spectra, pressures) a few rows at a time
+    (physics.separation.CHUNK, to keep its temporaries in cache): on leading shapes of every kind (a
+    scalar pressure; pressures x spectra with their own nodes; pressures broadcast against shared
+    nodes), with each refinement, every value is bit for bit what one pass of the formula over the
+    whole arrays gives."""
+    from roughcontact.physics import separation as physics_separation
+
+    q = log_grid(QL, Q1, 20)
+    C0 = 1e-18 / self_affine_hrms_factor(H, QL, QL, Q1)  # hrms 1 nm
+    spectra = np.stack([self_affine_psd(q, H, QL, QL, Q1, C0) * f for f in (0.5, 1.0, 2.0)])  # 3 spectra
+    upper = QL * np.array([4.0, 200.0])
+    nodes = [separation_nodes(q, C, upper, 4, 4, 10.0) for C in spectra]
+    s, w, count, _, s_tail, q_tail = (np.stack([n[i] for n in nodes]) for i in range(6))
+    p = np.geomspace(1e3, 1e8, 7)
+
+    cases = [(refinement, args) for refinement in ("none", "yang_persson", "wang_mueser")
+             for args in ((np.float64(1e6), s[0], w[0], count[0], s_tail[0], q_tail[0]),
+                          (p[:, None], s, w, count, s_tail, q_tail),
+                          (p, s[1], w[1], count[1], s_tail[1], q_tail[1]))]
+    monkeypatch.setattr(physics_separation, "CHUNK", chunk)
+    for refinement, (pressure, *nodes) in cases:
+        got = mean_separation(pressure, *nodes, E_star=E_STAR, alpha=ALPHA, refinement=refinement)
+        terms = {k: c for k, c in physics_separation.energy_factor_terms(refinement, ALPHA).items() if k}
+        whole = physics_separation._mean_separation_rows(np.asarray(pressure)[..., None] / E_STAR, *nodes, ALPHA, terms)
+        assert got.shape == whole.shape
+        np.testing.assert_array_equal(got, whole)
