@@ -223,16 +223,17 @@ def combined_psd_error(C1, C2, eta, s1, s2, s_eta):
 # ----------------------------------------------------------------------------------------
 
 
-def _correlation_root(correlation):
+def correlation_root(correlation):
     """A matrix R with R R^T = ``correlation`` (its negative eigenvalues, from rounding or from a
     matrix assembled of pair sums, set to 0; rows rescaled to a unit diagonal): z = R xi, xi standard
-    normal, has that correlation."""
+    normal, has that correlation (dimensionless, (m, m)). An eigen-decomposition, O(m^3): computed
+    once for all the draws of a spectrum (``psd_draws(root=...)``), not once per block of draws."""
     lam, V = np.linalg.eigh(correlation)
     root = V * np.sqrt(np.clip(lam, 0.0, None))
     return root / np.sqrt(np.maximum(np.sum(root * root, axis=1), 1e-300))[:, None]
 
 
-def psd_draws(C, modes, draws, seed, stream, correlation=None):
+def psd_draws(C, modes, draws, seed, stream, correlation=None, root=None):
     """Binned PSDs drawn within their statistical band.
 
     A bin's mean of n independent exponential mode powers is C_true Gamma(n, 1)/n. Given the
@@ -263,6 +264,9 @@ def psd_draws(C, modes, draws, seed, stream, correlation=None):
         Random seed of the scene and the quantity's stream (one per surface).
     correlation : array (m, m) or None
         Correlation matrix of the bins' errors (dimensionless).
+    root : array (m, m) or None
+        ``correlation_root(correlation)``, given instead of ``correlation`` where the same
+        correlation serves many calls (the blocks of draws of one spectrum): the same draws.
 
     Returns
     -------
@@ -275,7 +279,8 @@ def psd_draws(C, modes, draws, seed, stream, correlation=None):
     """
     flat = np.ravel(draws).astype(int)
     out = np.empty((flat.size, C.size))
-    root = None if correlation is None else _correlation_root(correlation)
+    if root is None and correlation is not None:
+        root = correlation_root(correlation)
     for i, d in enumerate(flat):
         if d == 0:
             out[i] = C
@@ -289,13 +294,13 @@ def psd_draws(C, modes, draws, seed, stream, correlation=None):
     return out.reshape(np.shape(draws) + (C.size,))
 
 
-def psd_draws_on_grid(draws, q_grid, q, C, modes, how, seed, stream, correlation=None):
-    """:func:`psd_draws` put on ``q_grid`` with
+def psd_draws_on_grid(draws, q_grid, q, C, modes, how, seed, stream, correlation=None, root=None):
+    """:func:`psd_draws` (``correlation`` or its ``root``) put on ``q_grid`` with
     :func:`roughcontact.physics.estimators.binned_psd_on_grid` and made unbiased by
     :func:`interpolation_unbiasing` (m^4), shape draws.shape + (len(q_grid),); draw 0 is the
     measured PSD on the grid."""
     flat = np.ravel(draws).astype(int)
-    binned = psd_draws(C, modes, flat, seed, stream, correlation)
+    binned = psd_draws(C, modes, flat, seed, stream, correlation, root)
     a, b, t, inside = grid_weights(q_grid, q, how)
     with np.errstate(divide="ignore"):
         logs = np.log(binned)

@@ -25,6 +25,7 @@ from roughcontact.physics.preprocessing import detrend_basis, hann_window_1d, ha
 from roughcontact.physics.uncertainty import (
     coherence_draws_on_grid,
     coherence_error_on_grid,
+    correlation_root,
     psd_draws_on_grid,
     psd_error_on_grid,
     spread_inflation,
@@ -193,11 +194,12 @@ def drawn_psd(draw: xr.DataArray, ds: xr.Dataset, name: str, q_grid: np.ndarray,
     """The measured PSD of ``name`` drawn within its band, on the grid: dims (draw, q)."""
     q, C, err = measured_bins(ds, name)
     corr = ds.get(f"psd_{name}_measured_correlation")
+    root = None
     if corr is not None:  # the window's correlation between the bins (bin_covariance), on the same bins
         index = measured_bin_index(ds, name)
-        corr = np.nan_to_num(corr.values[np.ix_(index, index)])
+        root = correlation_root(np.nan_to_num(corr.values[np.ix_(index, index)]))  # once, not per block of draws
     kwargs = dict(q_grid=q_grid, q=q, C=C, modes=_modes(C, err), how="zero" if how == "none" else how,
-                  seed=seed, stream=STREAMS[name], correlation=corr)
+                  seed=seed, stream=STREAMS[name], root=root)
     return xr.apply_ufunc(psd_draws_on_grid, draw, kwargs=kwargs, output_core_dims=[["q"]], dask="parallelized",
                           output_dtypes=[float], dask_gufunc_kwargs={"output_sizes": {"q": q_grid.size}})
 
