@@ -331,7 +331,8 @@ def _computed(p: StagePlan, scene: Scene, upstream, files: dict, shape: Shape, r
     checked against its describe (:func:`conforms`), stamped with units and provenance (:func:`_finish`)."""
     from .scheduling import chunk_sweeps
 
-    chunks = sizing.stage_chunks(scene, p.stage, p.wanted, shape)
+    spanned = sizing.spanned_dims(scene, p.stage, upstream.values())
+    chunks = sizing.stage_chunks(scene, p.stage, p.wanted, shape, spanned)
     inp = StageInput(
         params=p.params,
         upstream=chunk_sweeps(upstream, chunks),  # a sweep made upstream (eta, draw) splits this stage's work too

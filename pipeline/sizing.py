@@ -102,7 +102,7 @@ def own_sweep_dims(scene, st) -> dict[str, int]:
 
 def spanned_dims(scene, st, upstream) -> dict[str, int]:
     """The scene's sweep dimensions a stage's result spans: those of the keys it reads and those
-    its upstream results span (``upstream``: their shapes, None where unknown)."""
+    its upstream results span (``upstream``: their shapes or datasets, None where unknown)."""
     sweeps = scene.sweep_sizes()
     out: dict[str, int] = {}
     for shape in upstream:
@@ -125,13 +125,15 @@ def outputs_asked(st, wanted) -> list[str]:
     return [name for name, var in st.outputs.items() if not var.optional or name in wanted]
 
 
-def stage_chunks(scene, st, wanted, shape) -> dict[str, int]:
-    """Chunk sizes for the stage's sweep dimensions: the scene's explicit ones, the others chosen
-    so that a chunk's working memory (:func:`point_bytes` of the stage's shape) stays near
-    chunk_mb; the dimensions the computation couples are never chunked."""
+def stage_chunks(scene, st, wanted, shape, spanned: dict[str, int]) -> dict[str, int]:
+    """Chunk sizes for the sweep dimensions the stage's result spans (``spanned``:
+    :func:`spanned_dims`): the scene's explicit ones, the others chosen so that a chunk's working
+    memory (:func:`point_bytes` of the stage's shape) stays near chunk_mb; the dimensions the
+    computation couples are never chunked. A sweep dimension the result does not span (the
+    pressures, for the psd stage) takes no share of the budget."""
     from .scheduling import auto_chunks
 
-    sizes = scene.sweep_sizes()
+    sizes = {d: n for d, n in scene.sweep_sizes().items() if d in spanned}
     per_point = point_bytes(shape, len(outputs_asked(st, wanted)), sizes)
     budget = scene.chunk_mb * 2**20 / max(per_point, 8)
     whole = [dim for dim in shape.coupled if dim in sizes]  # one chunk along these, whatever the scene says
@@ -164,7 +166,7 @@ def estimate(plan, scene, spanned: dict[str, int], own, in_flight: int, lazy: fr
     result = result_bytes(st, plan.wanted, sizes, own.lacks)
     per_point = point_bytes(own, len(outputs_asked(st, plan.wanted)), spanned)
     chunked = (set(own_sweep_dims(scene, st)) | set(lazy)) - set(own.coupled) - set(own_sizes)
-    chunks = stage_chunks(scene, st, plan.wanted, own)
+    chunks = stage_chunks(scene, st, plan.wanted, own, spanned)
     block = {d: (min(chunks.get(d, n), n) if d in chunked else n) for d, n in spanned.items()}
     blocks = math.prod(math.ceil(n / block[d]) for d, n in spanned.items())
     parallel = min(in_flight, blocks)

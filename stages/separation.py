@@ -115,11 +115,14 @@ def check_separation(inp: StageInput) -> None:
 
 def describe_separation(inp: StageInput) -> Shape:
     """The magnifications (on the psd stage's q grid; computed whole) and the working memory per
-    sweep point: a few float64 temporaries over the quadrature nodes, about order x (q nodes +
-    depth x panels per decade)."""
+    sweep point: the quadrature nodes and weights of each spectrum (about order x (q nodes + depth x
+    panels per decade) each), shared by its pressures. The kernel's own temporaries do not grow
+    with the block: it works through a few rows at a time (physics/separation.py, ``CHUNK``)."""
     panels = int(np.ceil(float(inp["numerics.separation_depth"]) * inp["numerics.separation_panels_per_decade"]))
     nodes = (int(inp.upstream["psd"].sizes["q"]) + panels + 1) * int(inp["numerics.separation_gauss_points"])
-    return dataclasses.replace(zeta_shape(inp, inp.upstream["psd"]), work={"temporaries": 6, _NODES: nodes},
+    pressures = max(int(np.size(inp["load.p"])), 1)
+    return dataclasses.replace(zeta_shape(inp, inp.upstream["psd"]),
+                               work={"node_arrays": 2, _NODES: nodes, "per_pressure": 1 / pressures},
                                coupled=("zeta",), lacks={"separation_u0": ("p",), "separation_beta": ("p",)})
 
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 import ast
 import dataclasses
 import importlib.metadata
+import math
 import re
 import subprocess
 import sys
@@ -194,11 +195,29 @@ def test_a_dimension_the_stage_couples_is_never_chunked(toy_registry):
     free = toy_registry(_toy("toy_free", lambda inp: None, outputs={"toy_a": Var("1", "a")}))
     coupled = toy_registry(_toy("toy_coupled", lambda inp: None, outputs={"toy_b": Var("1", "b")},
                                 describe=lambda inp: Shape(coupled=("p",))))
-    assert sizing.stage_chunks(sc, free, frozenset(), Shape()) == {"p": 2, "eta": 1}
-    chunks = sizing.stage_chunks(sc, coupled, frozenset(), coupled.describe(None))
+    sweeps = sc.sweep_sizes()
+    assert sizing.stage_chunks(sc, free, frozenset(), Shape(), sweeps) == {"p": 2, "eta": 1}
+    chunks = sizing.stage_chunks(sc, coupled, frozenset(), coupled.describe(None), sweeps)
     assert chunks == {"eta": 1}
     inp = StageInput(params={}, chunks=chunks)
     assert inp.sweep("p", np.arange(9.0)).chunks is None
+
+
+def test_a_sweep_the_result_does_not_span_takes_no_share_of_the_chunk_budget(toy_registry):
+    """A stage whose result spans the draws but not the pressures (the psd stage with bands) gets
+    draw blocks as large as the memory budget allows: the pressures do not shrink them."""
+    raw = make_scene(load={"p": {"from": "1 kPa", "to": "1 MPa", "num": 100}}, bands={"draws": 200})
+    raw["interface"]["eta"] = [0.0, 0.5, -0.5]
+    sc = scenes.from_dict(raw)
+    st = toy_registry(_toy("toy_spectra", lambda inp: None, outputs={"toy_c": Var("m^4", "c")}))
+    work = Shape(work={"values": 2**20 / 8 / 201})  # about 201 sweep points per block of chunk_mb = 1 MiB
+    sc.chunk_mb = 1
+    everything = sizing.stage_chunks(sc, st, frozenset(), work, sc.sweep_sizes())
+    spanned = {d: n for d, n in sc.sweep_sizes().items() if d != "p"}
+    without_p = sizing.stage_chunks(sc, st, frozenset(), work, spanned)
+    assert "p" not in without_p and everything.get("draw", 201) < without_p.get("draw", 201)
+    block = math.prod(without_p.get(d, n) for d, n in spanned.items())
+    assert block <= 201 < 2 * block  # as large as halving the largest dimension allows
 
 
 def test_a_result_unlike_its_description_is_refused(tmp_path, toy_registry):
