@@ -352,6 +352,9 @@ def _target(path, ds: xr.Dataset, group: _Group, compress: dict[str, tuple | Non
     with ncio.dataset(path, "a") as nc:
         with ncio.locked():
             targets = {n: nc.variables[n] for n in group.names}
+            for n, target in targets.items():  # the values as computed: netCDF4's masking pass cost 4x the write
+                if not set(_PACKING) & set(ds[n].attrs):  # (packed variables are scaled by netCDF4 on the way)
+                    target.set_auto_maskandscale(False)
 
         def write(name, region, values, encoded):
             with ncio.locked():
