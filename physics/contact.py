@@ -93,9 +93,13 @@ def contact_area_ratio(p, G):
     Raises ValueError for a negative p or G.
     """
     p, G = require_pressure(p), require_nonnegative(G, "G")
+    positive = G > 0
     with np.errstate(divide="ignore", invalid="ignore"):
-        arg = np.where(G > 0, p / (2.0 * np.sqrt(np.where(G > 0, G, 1.0))), np.inf)
-    return erf(arg)
+        # the denominator on G's own (smaller) shape, then one array of the broadcast shape, filled
+        # in place: a sweep's block of p x G makes no further temporaries of its size
+        arg = np.asarray(np.divide(p, 2.0 * np.sqrt(np.where(positive, G, 1.0))))
+    np.copyto(arg, np.inf, where=~positive)
+    return erf(arg, out=arg) if arg.ndim else erf(arg[()])
 
 
 def stress_distribution(sigma, p, G):
