@@ -57,15 +57,11 @@ def encoding(ds: xr.Dataset, compress: bool = True) -> dict[str, dict]:
 
 def lazy_variable(ds: xr.Dataset, name: str, compress: bool = True) -> dict:
     """``netCDF4.Dataset.createVariable`` keywords of a dask-backed variable: no fill value on a
-    coordinate, NaN on floating-point data. A large one is stored in chunks of its dask blocks,
-    compressed (``compress``; data variables only) or not: each computed block is then one chunk,
-    written whole. (Stored contiguously, an uncompressed block was written as thousands of short
-    strided runs, one per innermost row: 2.7 s of a 1e8-point sweep's 4 s.)"""
+    coordinate, NaN on floating-point data, compression in the variable's dask chunks."""
     var = ds[name].variable
-    coordinate = name in ds.coords
-    floating = np.issubdtype(var.dtype, np.floating)
-    kw = {"fill_value": False} if coordinate else {"fill_value": np.nan if floating else None}
-    if var.ndim and var.nbytes >= COMPRESS_BYTES:
-        chunks = tuple(max(c) for c in var.chunks)
-        kw.update(_compressed(var, chunks) if compress and not coordinate else {"chunksizes": chunks})
+    if name in ds.coords:
+        return {"fill_value": False}
+    kw = {"fill_value": np.nan if np.issubdtype(var.dtype, np.floating) else None}
+    if compress and var.ndim and var.nbytes >= COMPRESS_BYTES:
+        kw.update(_compressed(var, tuple(max(c) for c in var.chunks)))
     return kw
