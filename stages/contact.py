@@ -56,6 +56,7 @@ def compute_contact(inp: StageInput) -> xr.Dataset:
         input_core_dims=[["q"], ["q"], ["zeta"], []], output_core_dims=[["zeta"]],
         dask="parallelized", output_dtypes=[float],
     ).assign_coords(zeta=zeta)
+    G = inp.shared(G)  # once, not for every few blocks of pressures
     p = inp.sweep("p", inp["load.p"])
     G_area = _corrected(inp, p, G)
     area = xr.apply_ufunc(contact_area_ratio, p, G_area, dask="parallelized", output_dtypes=[float])

@@ -28,6 +28,8 @@ def _sweep_scene(num_p=40, **kw):
 
 
 def test_stages_never_compute_while_building_the_graph(tmp_path):
+    """Under a default scheduler that refuses to compute, every stage builds its graph; the one
+    exception, a small intermediate every block needs (StageInput.shared), names its scheduler."""
     sc = scenes.from_dict(_sweep_scene())
     psd_result = engine.run(sc, tmp_path, targets=["psd_combined"], report=engine.Reporter(None))["base"]["psd"]
     contact = stages()["contact"]
@@ -99,3 +101,20 @@ def test_auto_chunks_respect_the_budget_and_explicit_sizes():
     assert full["eta"] == 3
     assert np.prod(list(full.values())) <= 50_000
     assert auto_chunks(sizes, 1e12) == {}
+
+
+def test_a_small_intermediate_every_block_needs_is_computed_once(tmp_path, monkeypatch):
+    """G (per eta and hrms) is needed by every block of pressures: computed once per G block, not
+    once per batch of blocks of the area (the large sweep computed it 512 times), same values."""
+    import roughcontact.stages.contact as contact_stage
+
+    raw = _sweep_scene(num_p=60)
+    with monkeypatch.context() as m:  # G left lazy, as before: computed again for every batch of area blocks
+        m.setattr(StageInput, "shared", lambda self, value: value)
+        reference = engine.run(scenes.from_dict(raw), tmp_path / "reference", report=engine.Reporter(None))
+    calls = []
+    real = contact_stage.persson_G
+    monkeypatch.setattr(contact_stage, "persson_G", lambda *a, **k: calls.append(1) or real(*a, **k))
+    again = engine.run(scenes.from_dict(raw), tmp_path / "again", force=("contact",), report=engine.Reporter(None))
+    assert len(calls) == 2  # G's blocks (eta in 2 chunks); lazy, a block per batch of 4 of the 14 area blocks
+    xr.testing.assert_identical(_strip(reference["base"]["contact"]), _strip(again["base"]["contact"]))
