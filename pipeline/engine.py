@@ -331,7 +331,8 @@ def _computed(p: StagePlan, scene: Scene, upstream, files: dict, shape: Shape, r
     checked against its describe (:func:`conforms`), stamped with units and provenance (:func:`_finish`)."""
     from .scheduling import chunk_sweeps
 
-    spanned = sizing.spanned_dims(scene, p.stage, upstream.values())
+    sweeps = scene.sweep_sizes()
+    spanned = {d: n for d, n in shape.sizes.items() if d in sweeps}  # the preflight's: shape has the dims spanned
     chunks = sizing.stage_chunks(scene, p.stage, p.wanted, shape, spanned)
     inp = StageInput(
         params=p.params,

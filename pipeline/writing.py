@@ -317,6 +317,11 @@ def _direct(dset, dtype, chunk, packed) -> tuple | None:
     return tuple(chunk), np.dtype(dtype).str, cf.LEVEL, packed
 
 
+def _packed(ds: xr.Dataset, name: str) -> bool:
+    """Whether variable ``name`` carries packing attributes (netCDF4 scales its values on writing)."""
+    return bool(set(_PACKING) & set(ds[name].attrs))
+
+
 @contextlib.contextmanager
 def _target(path, ds: xr.Dataset, group: _Group, compress: dict[str, tuple | None]):
     """Yield ``(write, specs)`` for the group's variables defined in the file: ``write(name, region,
@@ -327,7 +332,7 @@ def _target(path, ds: xr.Dataset, group: _Group, compress: dict[str, tuple | Non
     at once), else through netCDF4."""
     h5py = _h5py()
     plain = (h5py is None or not any(p is not None for p in compress.values())  # nothing to compress: netCDF4
-             or any(ds[n].dtype.kind not in "fiu" or set(_PACKING) & set(ds[n].attrs) for n in group.names))
+             or any(ds[n].dtype.kind not in "fiu" or _packed(ds, n) for n in group.names))
     if not plain:
         with ncio.locked():
             f = h5py.File(path, "r+")
@@ -353,7 +358,7 @@ def _target(path, ds: xr.Dataset, group: _Group, compress: dict[str, tuple | Non
         with ncio.locked():
             targets = {n: nc.variables[n] for n in group.names}
             for n, target in targets.items():  # the values as computed: netCDF4's masking pass cost 4x the write
-                if not set(_PACKING) & set(ds[n].attrs):  # (packed variables are scaled by netCDF4 on the way)
+                if not _packed(ds, n):  # (packed variables are scaled by netCDF4 on the way)
                     target.set_auto_maskandscale(False)
 
         def write(name, region, values, encoded):
