@@ -34,9 +34,8 @@ from .quadrature import cumulative_integral, gauss_legendre_panels, integral_to,
 from .rows import row_chunks
 from .special import erf, erfcx, exp1, exp1_fast
 
-#: elements of one temporary of :func:`mean_separation` per chunk of rows (512 KiB of float64: in
-#: a core's L2 cache; measured best among 16 000-262 144 on the bands' 32 million nodes, where the
-#: whole-array kernel took 1.1-3.5 times as long, docs/scale-out.md)
+#: elements of one temporary of :func:`mean_separation` per chunk of rows (512 KiB: in L2 cache; the
+#: fastest of 16 000-262 144 on the bands' 32 million nodes, docs/scale-out.md)
 CHUNK = 65_536
 
 #: eps = exp(\\int_0^inf 2x ln x exp(-x^2) dx) = exp(-gamma_Euler / 2) = 0.749306..., seed eq 28.
